@@ -1,0 +1,203 @@
+/* The scene model: growable arrays, defaults, finishing checks, reader dispatch. */
+#include "scene.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void scene_init(scene *s)
+{
+    memset(s, 0, sizeof *s);
+    s->max_depth = SCENE_DEFAULT_MAX_DEPTH;
+    s->camera.projection = SCENE_PERSPECTIVE;
+    s->camera.d = 1.0f;
+}
+
+static void array_free(scene_array *a)
+{
+    free(a->data);
+    a->data = NULL;
+    a->count = a->cap = 0;
+}
+
+void scene_free(scene *s)
+{
+    free(s->name);
+    array_free(&s->materials);
+    array_free(&s->lights);
+    array_free(&s->spheres);
+    array_free(&s->triangles);
+    array_free(&s->polygons);
+    array_free(&s->poly_verts);
+    array_free(&s->cones);
+    scene_init(s);
+}
+
+long scene_push(scene_array *a, const void *elem, size_t elem_size)
+{
+    if (a->count == a->cap) {
+        size_t cap = a->cap ? a->cap * 2 : 16;
+        void *data;
+        if (cap > ((size_t)-1) / elem_size || cap > (size_t)0x7fffffff)
+            return -1;
+        data = realloc(a->data, cap * elem_size);
+        if (!data)
+            return -1;
+        a->data = data;
+        a->cap = cap;
+    }
+    memcpy((char *)a->data + a->count * elem_size, elem, elem_size);
+    return (long)a->count++;
+}
+
+vec3f vec3f_make(float x, float y, float z)
+{
+    vec3f v;
+    v.x = x;
+    v.y = y;
+    v.z = z;
+    return v;
+}
+
+vec3f vec3f_sub(vec3f a, vec3f b)
+{
+    return vec3f_make(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+
+vec3f vec3f_cross(vec3f a, vec3f b)
+{
+    return vec3f_make(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+float vec3f_dot(vec3f a, vec3f b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+float vec3f_length(vec3f a)
+{
+    return (float)sqrt((double)a.x * a.x + (double)a.y * a.y + (double)a.z * a.z);
+}
+
+int vec3f_normalize(vec3f a, vec3f *out)
+{
+    double len = sqrt((double)a.x * a.x + (double)a.y * a.y + (double)a.z * a.z);
+    if (!(len > 0.0) || !isfinite(len))
+        return -1;
+    *out = vec3f_make((float)(a.x / len), (float)(a.y / len), (float)(a.z / len));
+    return 0;
+}
+
+int scene_camera_basis(scene_camera *c, vec3f view, vec3f up)
+{
+    vec3f w, u;
+    if (vec3f_normalize(vec3f_make(-view.x, -view.y, -view.z), &w) != 0)
+        return -1;
+    /* up parallel to the view: the cross product vanishes (relative to the sizes) */
+    {
+        vec3f x = vec3f_cross(up, w);
+        float ul = vec3f_length(up);
+        if (!(ul > 0.0f) || !(vec3f_length(x) > 1e-6f * ul))
+            return -1;
+        if (vec3f_normalize(x, &u) != 0)
+            return -1;
+    }
+    c->w = w;
+    c->u = u;
+    c->v = vec3f_cross(w, u);
+    return 0;
+}
+
+static int finite3(vec3f a)
+{
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+
+int scene_finish(scene *s, int width, int height, int max_depth, char *err, size_t errlen)
+{
+    scene_camera *c = &s->camera;
+    const char *name = s->name ? s->name : "scene";
+    if (width > 0)
+        s->width = width;
+    if (height > 0)
+        s->height = height;
+    if (max_depth > 0)
+        s->max_depth = max_depth;
+    if (s->width <= 0 || s->height <= 0 || s->width > 65536 || s->height > 65536 ||
+        (long long)s->width * s->height > (1LL << 28)) {
+        snprintf(err, errlen, "%s: image size %dx%d out of range (1..65536 per side, at most 2^28 pixels)",
+                 name, s->width, s->height);
+        return -1;
+    }
+    if (s->max_depth < 1 || s->max_depth > 64) {
+        snprintf(err, errlen, "%s: maximum depth %d out of range (1..64)", name, s->max_depth);
+        return -1;
+    }
+    if (c->nff_angle_deg > 0.0f) {
+        /* NFF: the angle spans the centres of the outer pixel rows; square pixels. */
+        double half = tan(c->nff_angle_deg * 0.5 * 3.14159265358979323846 / 180.0);
+        int rows = s->height > 1 ? s->height - 1 : 1;
+        double pitch = 2.0 * half / rows;
+        c->r = (float)(pitch * s->width * 0.5);
+        c->l = -c->r;
+        c->t = (float)(pitch * s->height * 0.5);
+        c->b = -c->t;
+        c->d = 1.0f;
+    }
+    if (!finite3(c->eye) || !finite3(c->u) || !finite3(c->v) || !finite3(c->w) ||
+        !isfinite(c->l) || !isfinite(c->r) || !isfinite(c->b) || !isfinite(c->t) ||
+        !isfinite(c->d)) {
+        snprintf(err, errlen, "%s: camera has non-finite values", name);
+        return -1;
+    }
+    if (!(c->r > c->l) || !(c->t > c->b)) {
+        snprintf(err, errlen, "%s: camera window must have l < r and b < t", name);
+        return -1;
+    }
+    if (c->projection == SCENE_PERSPECTIVE && !(c->d > 0.0f)) {
+        snprintf(err, errlen, "%s: perspective camera needs a positive image-plane distance", name);
+        return -1;
+    }
+    if (fabsf(vec3f_length(c->u) - 1) > 1e-4f || fabsf(vec3f_length(c->v) - 1) > 1e-4f ||
+        fabsf(vec3f_length(c->w) - 1) > 1e-4f || fabsf(vec3f_dot(c->u, c->v)) > 1e-4f ||
+        fabsf(vec3f_dot(c->u, c->w)) > 1e-4f || fabsf(vec3f_dot(c->v, c->w)) > 1e-4f) {
+        snprintf(err, errlen, "%s: camera basis u, v, w is not orthonormal", name);
+        return -1;
+    }
+    if (c->projection == SCENE_OBLIQUE) {
+        if (vec3f_normalize(c->dir, &c->dir) != 0 || vec3f_dot(c->dir, c->w) >= 0.0f) {
+            snprintf(err, errlen,
+                     "%s: oblique camera direction must be non-zero and point into the view (-w side)",
+                     name);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static int ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    size_t i;
+    if (n < m)
+        return 0;
+    for (i = 0; i < m; i++) {
+        char a = s[n - m + i];
+        if (a >= 'A' && a <= 'Z')
+            a = (char)(a - 'A' + 'a');
+        if (a != suffix[i])
+            return 0;
+    }
+    return 1;
+}
+
+int scene_load(const char *path, scene *s, char *err, size_t errlen)
+{
+    if (ends_with(path, ".json"))
+        return json_scene_load(path, s, err, errlen);
+    if (ends_with(path, ".nff"))
+        return nff_load(path, s, err, errlen);
+    snprintf(err, errlen, "%s: unknown scene format (expected a .nff or .json file)", path);
+    return -1;
+}

@@ -1,0 +1,128 @@
+/* The scene model: what a reader produces and the renderer consumes.
+ * Readers know nothing of OpenCL; the renderer knows nothing of file formats. */
+#ifndef CW_SCENE_H
+#define CW_SCENE_H
+
+#include <stddef.h>
+
+typedef struct {
+    float x, y, z;
+} vec3f;
+
+enum scene_projection {
+    SCENE_PERSPECTIVE = 0,
+    SCENE_ORTHOGRAPHIC = 1,
+    SCENE_OBLIQUE = 2,
+};
+
+typedef struct {
+    enum scene_projection projection;
+    vec3f eye;
+    vec3f u, v, w;       /* orthonormal viewing basis, w points backwards (away from the view) */
+    float l, r, b, t;    /* image-plane window, in u and v units */
+    float d;             /* perspective: distance from eye to image plane */
+    vec3f dir;           /* oblique: the common ray direction (world space, unit length) */
+    float nff_angle_deg; /* > 0: NFF angle; the window is derived in scene_finish() */
+} scene_camera;
+
+typedef struct {
+    vec3f ka, kd, ks, km; /* ambient, diffuse, specular, mirror: RGB */
+    float p;              /* Phong exponent */
+    vec3f kt;             /* transmission (parsed; not rendered yet) */
+    float ior;            /* index of refraction (parsed; not rendered yet) */
+} scene_material;
+
+typedef struct {
+    vec3f position;
+    vec3f intensity; /* RGB */
+} scene_light;
+
+typedef struct {
+    vec3f center;
+    float radius; /* NFF allows a negative radius (inside visible); stored as given */
+    int material;
+} scene_sphere;
+
+typedef struct {
+    vec3f p[3];
+    vec3f n[3];      /* vertex normals, used when has_normals */
+    int has_normals;
+    int material;
+} scene_triangle;
+
+typedef struct {
+    int first; /* index of the first vertex in scene.poly_verts */
+    int count; /* number of vertices, >= 3 */
+    int material;
+} scene_polygon;
+
+typedef struct {
+    vec3f base, apex;
+    float base_radius, apex_radius;
+    int material;
+} scene_cone;
+
+/* A growable array of elements of one type. */
+typedef struct {
+    void *data;
+    size_t count, cap;
+} scene_array;
+
+typedef struct {
+    char *name; /* scene name: the file's base name without extension */
+    scene_camera camera;
+    int width, height;
+    int max_depth;
+    vec3f background;
+    vec3f ambient;
+
+    scene_array materials;  /* scene_material */
+    scene_array lights;     /* scene_light */
+    scene_array spheres;    /* scene_sphere */
+    scene_array triangles;  /* scene_triangle */
+    scene_array polygons;   /* scene_polygon */
+    scene_array poly_verts; /* vec3f */
+    scene_array cones;      /* scene_cone: parsed, not rendered yet */
+} scene;
+
+#define SCENE_AT(arr, type, i) (((type *)(arr).data)[i])
+#define SCENE_DEFAULT_MAX_DEPTH 5
+
+/* Sets defaults: no objects, black background, zero ambient, depth 5. */
+void scene_init(scene *s);
+void scene_free(scene *s);
+
+/* Appends one element of elem_size bytes; returns its index or -1 when out of memory. */
+long scene_push(scene_array *a, const void *elem, size_t elem_size);
+
+/* Completes a loaded scene for the given image size (width/height may be 0 to keep the
+ * scene's own): derives the NFF window, checks that the camera basis is orthonormal.
+ * Returns 0, or -1 with a message in err. */
+int scene_finish(scene *s, int width, int height, int max_depth, char *err, size_t errlen);
+
+/* Loads a scene, choosing the reader by extension (.nff, .json). Returns 0, or -1 with
+ * "file:line: message" in err. */
+int scene_load(const char *path, scene *s, char *err, size_t errlen);
+
+/* The readers. *_load reads a file; *_parse reads text in memory, naming it `name` in
+ * errors. Both return 0, or -1 with "name:line: message" in err. */
+int nff_load(const char *path, scene *s, char *err, size_t errlen);
+int nff_parse(const char *text, size_t len, const char *name, scene *s, char *err, size_t errlen);
+int json_scene_load(const char *path, scene *s, char *err, size_t errlen);
+int json_scene_parse(const char *text, size_t len, const char *name, scene *s, char *err,
+                     size_t errlen);
+
+/* Vector helpers shared by readers and the camera set-up. */
+vec3f vec3f_make(float x, float y, float z);
+vec3f vec3f_sub(vec3f a, vec3f b);
+vec3f vec3f_cross(vec3f a, vec3f b);
+float vec3f_dot(vec3f a, vec3f b);
+float vec3f_length(vec3f a);
+/* Returns 0 and the unit vector, or -1 when a is zero or not finite. */
+int vec3f_normalize(vec3f a, vec3f *out);
+/* Builds u, v, w from a view direction (eye towards look-at) and an up vector, as in
+ * Shirley & Marschner: w = -view/|view|, u = up x w / |up x w|, v = w x u.
+ * Returns -1 when the view is zero or up is parallel to it. */
+int scene_camera_basis(scene_camera *c, vec3f view, vec3f up);
+
+#endif

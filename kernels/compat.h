@@ -1,0 +1,90 @@
+/* The only place OpenCL keywords appear. The kernel headers include this file, so
+ * that they compile both as OpenCL C 1.2 and as host C99 (for host-side use and
+ * tests): vectors are used only through the v3_* functions below. */
+#ifndef CW_COMPAT_H
+#define CW_COMPAT_H
+
+#ifdef __OPENCL_VERSION__
+
+#define CW_KERNEL __kernel
+#define CW_GLOBAL __global
+#define CW_CONSTANT __constant
+#define CW_INLINE static inline
+
+typedef float4 cw_float4;
+typedef float3 vec3;
+
+CW_INLINE vec3 v3(float x, float y, float z) { return (float3)(x, y, z); }
+CW_INLINE vec3 v3_from4(cw_float4 a) { return a.xyz; }
+CW_INLINE cw_float4 v4_from3(vec3 a, float w) { return (float4)(a, w); }
+CW_INLINE vec3 v3_add(vec3 a, vec3 b) { return a + b; }
+CW_INLINE vec3 v3_sub(vec3 a, vec3 b) { return a - b; }
+CW_INLINE vec3 v3_mul(vec3 a, vec3 b) { return a * b; }
+CW_INLINE vec3 v3_scale(vec3 a, float s) { return a * s; }
+CW_INLINE float v3_dot(vec3 a, vec3 b) { return dot(a, b); }
+CW_INLINE vec3 v3_cross(vec3 a, vec3 b) { return cross(a, b); }
+CW_INLINE float v3_len(vec3 a) { return length(a); }
+CW_INLINE vec3 v3_norm(vec3 a) { return normalize(a); }
+#define cw_sqrt(x) sqrt(x)
+#define cw_fabs(x) fabs(x)
+#define cw_fmax(a, b) fmax((a), (b))
+#define cw_fmin(a, b) fmin((a), (b))
+#define cw_pow(a, b) pow((a), (b))
+#define cw_atomic_inc(p) atomic_inc(p)
+
+#else /* host C99 */
+
+#include <math.h>
+
+#define CW_KERNEL
+#define CW_GLOBAL
+#define CW_CONSTANT
+#define CW_INLINE static inline
+
+typedef struct {
+    float x, y, z, w;
+} __attribute__((aligned(16))) cw_float4;
+
+typedef struct {
+    float x, y, z;
+} vec3;
+
+CW_INLINE vec3 v3(float x, float y, float z)
+{
+    vec3 r;
+    r.x = x;
+    r.y = y;
+    r.z = z;
+    return r;
+}
+CW_INLINE vec3 v3_from4(cw_float4 a) { return v3(a.x, a.y, a.z); }
+CW_INLINE cw_float4 v4_from3(vec3 a, float w)
+{
+    cw_float4 r;
+    r.x = a.x;
+    r.y = a.y;
+    r.z = a.z;
+    r.w = w;
+    return r;
+}
+CW_INLINE vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+CW_INLINE vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+CW_INLINE vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }
+CW_INLINE vec3 v3_scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
+CW_INLINE float v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+CW_INLINE vec3 v3_cross(vec3 a, vec3 b)
+{
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+CW_INLINE float v3_len(vec3 a) { return sqrtf(v3_dot(a, a)); }
+CW_INLINE vec3 v3_norm(vec3 a) { return v3_scale(a, 1.0f / v3_len(a)); }
+#define cw_sqrt(x) sqrtf(x)
+#define cw_fabs(x) fabsf(x)
+#define cw_fmax(a, b) fmaxf((a), (b))
+#define cw_fmin(a, b) fminf((a), (b))
+#define cw_pow(a, b) powf((a), (b))
+#define cw_atomic_inc(p) ((*(p))++)
+
+#endif
+
+#endif
