@@ -1,0 +1,78 @@
+/* Thin entry kernels: index, bounds check, one call into the domain headers. */
+#include "camera.h"
+#include "intersect.h"
+#include "shade.h"
+#include "types.h"
+
+#if (CW_HAS_SPHERES | CW_HAS_TRIANGLES | CW_HAS_POLYGONS | CW_HAS_MIRRORS) & ~1
+#error "feature flags CW_HAS_* must be 0 or 1"
+#endif
+
+#define CW_WORLD_ARGS                                                                       \
+    __global const cw_sphere *spheres, __global const cw_triangle *triangles,               \
+        __global const cw_polygon *polygons, __global const float4 *poly_verts
+
+static cw_world make_world(__global const cw_frame *f, __global const cw_sphere *spheres,
+                           __global const cw_triangle *triangles,
+                           __global const cw_polygon *polygons, __global const float4 *poly_verts)
+{
+    cw_world w;
+    w.spheres = spheres;
+    w.triangles = triangles;
+    w.polygons = polygons;
+    w.poly_verts = poly_verts;
+    w.num_spheres = f->num_spheres;
+    w.num_triangles = f->num_triangles;
+    w.num_polygons = f->num_polygons;
+    return w;
+}
+
+__kernel void cw_raygen(__global const cw_frame *f, __global cw_ray *rays)
+{
+    int gid = (int)get_global_id(0);
+    if (gid >= f->nx * f->ny)
+        return;
+    rays[gid] = cam_ray_for_pixel(f, gid);
+}
+
+__kernel void cw_intersect(__global const cw_frame *f, CW_WORLD_ARGS, __global const cw_ray *rays,
+                           __global cw_hit *hits, int n)
+{
+    int gid = (int)get_global_id(0);
+    cw_world w;
+    cw_ray ray;
+    if (gid >= n)
+        return;
+    ray = rays[gid];
+    if (ray.pixel < 0)
+        return;
+    w = make_world(f, spheres, triangles, polygons, poly_verts);
+    hits[gid] = isect_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, INFINITY);
+}
+
+/* Adds each ray's shading to its pixel and leaves the next level's ray in its place;
+ * counts the rays that go on. One ray per pixel per level, so no two work-items write
+ * the same pixel. */
+__kernel void cw_shade(__global const cw_frame *f, CW_WORLD_ARGS, __global const cw_light *lights,
+                       __global const cw_material *materials, __global cw_ray *rays,
+                       __global const cw_hit *hits, __global float4 *image,
+                       __global int *alive, int n)
+{
+    int gid = (int)get_global_id(0);
+    cw_world w;
+    cw_ray ray;
+    int pixel;
+    float3 c;
+    if (gid >= n)
+        return;
+    ray = rays[gid];
+    pixel = ray.pixel;
+    if (pixel < 0)
+        return;
+    w = make_world(f, spheres, triangles, polygons, poly_verts);
+    c = shade_ray(&w, f, lights, materials, &ray, hits[gid]);
+    image[pixel] += (float4)(c, 0.0f);
+    rays[gid] = ray;
+    if (ray.pixel >= 0)
+        atomic_inc(alive);
+}
