@@ -29,7 +29,7 @@ TEST_BIN := $(patsubst tests/%.c,$(BUILD)/%,$(TEST_SRC))
 DEFAULT_SCENE := scenes/default.json
 
 .PHONY: all render test clean deps format format-check
-all: $(BUILD)/clwhitted
+all: $(BUILD)/clwhitted $(BUILD)/scene2pov
 
 $(BUILD):
 	mkdir -p $(BUILD)
@@ -46,6 +46,10 @@ $(BUILD)/%.o: host/%.c $(wildcard host/*.h) kernels/types.h kernels/compat.h | $
 
 $(BUILD)/clwhitted: $(BUILD)/main.o $(LIB_OBJ)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+
+# Converts a scene to POV-Ray SDL with the same model (for comparisons and benchmarks).
+$(BUILD)/scene2pov: tools/scene2pov.c $(LIB_OBJ)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -o $@
 
 $(BUILD)/test_%: tests/test_%.c tests/testutil.h $(LIB_OBJ) $(KERNEL_SRC) $(wildcard host/*.h)
 	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -lcmocka -o $@

@@ -1,0 +1,65 @@
+#!/bin/sh
+# Command-line behaviour: exit codes, messages, outputs. Usage: tests/cli.sh BINARY
+set -u
+BIN=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
+ROOT=$(pwd)
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+pass=0
+
+check() { # check NAME EXPECTED_RC ACTUAL_RC
+    if [ "$2" -eq "$3" ]; then pass=$((pass + 1)); else
+        echo "FAIL: $1: exit $3, expected $2"; sed 's/^/    /' "$T/err" 2>/dev/null; fails=$((fails + 1)); fi
+}
+check_grep() { # check_grep NAME PATTERN FILE
+    if grep -q -- "$2" "$3"; then pass=$((pass + 1)); else
+        echo "FAIL: $1: '$2' not in:"; sed 's/^/    /' "$3"; fails=$((fails + 1)); fi
+}
+check_true() { # check_true NAME COMMAND...
+    n=$1; shift
+    if "$@"; then pass=$((pass + 1)); else echo "FAIL: $n"; fails=$((fails + 1)); fi
+}
+
+"$BIN" --help >"$T/out" 2>"$T/err"; check "--help" 0 $?
+check_grep "--help lists --output" "--output" "$T/out"
+check_grep "--help lists --device" "--device" "$T/out"
+"$BIN" >"$T/out" 2>"$T/err"; check "no scene" 2 $?
+check_grep "no scene message" "no scene file" "$T/err"
+"$BIN" --frobnicate x.nff >"$T/out" 2>"$T/err"; check "unknown option" 2 $?
+"$BIN" --width abc scenes/default.json >"$T/out" 2>"$T/err"; check "bad width" 2 $?
+check_grep "bad width message" "--width expects an integer" "$T/err"
+"$BIN" --depth 0 scenes/default.json >"$T/out" 2>"$T/err"; check "bad depth" 2 $?
+"$BIN" --list-devices >"$T/out" 2>"$T/err"; check "--list-devices" 0 $?
+check_grep "--list-devices shows a device" "device 0:0" "$T/out"
+"$BIN" --device no-such-device -o "$T/x.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "unknown device" 1 $?
+check_grep "unknown device message" "no OpenCL device matches" "$T/err"
+
+# bad input: file:line message, exit 1, no image written
+"$BIN" -o "$T/missing.png" "$T/missing.nff" >"$T/out" 2>"$T/err"; check "missing file" 1 $?
+check_grep "missing file named" "missing.nff" "$T/err"
+printf 'b 0 0 0\nq 1 2 3\n' >"$T/bad.nff"
+"$BIN" -o "$T/bad.png" "$T/bad.nff" >"$T/out" 2>"$T/err"; check "unknown entity" 1 $?
+check_grep "unknown entity names file:line" "bad.nff:2:" "$T/err"
+check_true "no image after bad input" test ! -e "$T/bad.png"
+printf '{\n  "camera": {\n    "eye": [0, 0, 1],\n    "look_at": [0, 0, 1],\n    "up": [0, 1, 0], "fov": 40\n  }\n}\n' >"$T/bad.json"
+"$BIN" -o "$T/badj.png" "$T/bad.json" >"$T/out" 2>"$T/err"; check "degenerate camera" 1 $?
+check_grep "json error names the file" "bad.json:" "$T/err"
+"$BIN" -o "$T/x.tiff" -W 8 -H 6 scenes/default.json >"$T/out" 2>"$T/err"; check "bad extension" 1 $?
+check_true "nothing left for a bad extension" test -z "$(ls "$T" | grep -v -e '^bad' -e '^out$' -e '^err$')"
+"$BIN" -o "$T/no/such/dir/x.png" -W 8 -H 6 scenes/default.json >"$T/out" 2>"$T/err"
+check "unwritable output" 1 $?
+
+# good renders
+"$BIN" -q -o "$T/small.png" -W 32 -H 24 scenes/default.json >"$T/out" 2>"$T/err"; check "png render" 0 $?
+check_true "png written" test -s "$T/small.png"
+check_true "png magic" sh -c "head -c 8 '$T/small.png' | od -An -c | grep -q 'P   N   G'"
+check_true "quiet prints nothing" test ! -s "$T/out"
+(cd "$T" && "$BIN" -W 16 -H 12 -d 2 "$ROOT/scenes/default.json" >"$T/out" 2>"$T/err"); check "default output" 0 $?
+check_true "default output is NAME.exr in the current folder" test -s "$T/default.exr"
+check_grep "summary names the output" "wrote default.exr" "$T/out"
+check_true "no temporary files left" test -z "$(ls "$T" | grep tmp)"
+
+echo "cli.sh: $pass passed, $fails failed"
+[ "$fails" -eq 0 ]
