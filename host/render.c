@@ -125,7 +125,11 @@ int renderer_list_devices(char *err, size_t errlen)
         char pname[256] = "";
         cl_device_id *devs = NULL;
         cl_uint nd = 0;
-        clGetPlatformInfo(plats[i], CL_PLATFORM_NAME, sizeof pname, pname, NULL);
+        cl_int e = clGetPlatformInfo(plats[i], CL_PLATFORM_NAME, sizeof pname, pname, NULL);
+        if (e != CL_SUCCESS) {
+            free(plats);
+            return cl_fail(e, "clGetPlatformInfo(CL_PLATFORM_NAME)", NULL, err, errlen);
+        }
         printf("platform %u: %s\n", i, pname);
         if (get_devices(plats[i], &devs, &nd, err, errlen) != 0) {
             free(plats);
@@ -136,11 +140,21 @@ int renderer_list_devices(char *err, size_t errlen)
             cl_device_type type = 0;
             cl_uint units = 0;
             cl_ulong mem = 0;
-            clGetDeviceInfo(devs[j], CL_DEVICE_NAME, sizeof dname, dname, NULL);
-            clGetDeviceInfo(devs[j], CL_DEVICE_TYPE, sizeof type, &type, NULL);
-            clGetDeviceInfo(devs[j], CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units, NULL);
-            clGetDeviceInfo(devs[j], CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
-            clGetDeviceInfo(devs[j], CL_DEVICE_OPENCL_C_VERSION, sizeof ver, ver, NULL);
+            cl_int e2 = clGetDeviceInfo(devs[j], CL_DEVICE_NAME, sizeof dname, dname, NULL);
+            if (e2 == CL_SUCCESS)
+                e2 = clGetDeviceInfo(devs[j], CL_DEVICE_TYPE, sizeof type, &type, NULL);
+            if (e2 == CL_SUCCESS)
+                e2 = clGetDeviceInfo(devs[j], CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units,
+                                     NULL);
+            if (e2 == CL_SUCCESS)
+                e2 = clGetDeviceInfo(devs[j], CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
+            if (e2 == CL_SUCCESS)
+                e2 = clGetDeviceInfo(devs[j], CL_DEVICE_OPENCL_C_VERSION, sizeof ver, ver, NULL);
+            if (e2 != CL_SUCCESS) {
+                free(devs);
+                free(plats);
+                return cl_fail(e2, "clGetDeviceInfo", NULL, err, errlen);
+            }
             printf("  device %u:%u  %-11s %s, %u compute units, %llu MiB, %s\n", i, j,
                    device_type_name(type), dname, units, (unsigned long long)(mem >> 20), ver);
         }
@@ -174,8 +188,14 @@ static int find_device(const char *spec, cl_device_id *out, char *err, size_t er
         for (j = 0; j < nd && !found; j++) {
             char name[256] = "";
             cl_device_type type = 0;
-            clGetDeviceInfo(devs[j], CL_DEVICE_NAME, sizeof name, name, NULL);
-            clGetDeviceInfo(devs[j], CL_DEVICE_TYPE, sizeof type, &type, NULL);
+            cl_int e = clGetDeviceInfo(devs[j], CL_DEVICE_NAME, sizeof name, name, NULL);
+            if (e == CL_SUCCESS)
+                e = clGetDeviceInfo(devs[j], CL_DEVICE_TYPE, sizeof type, &type, NULL);
+            if (e != CL_SUCCESS) {
+                free(devs);
+                free(plats);
+                return cl_fail(e, "clGetDeviceInfo", NULL, err, errlen);
+            }
             if (by_index) {
                 found = (i == want_p && j == want_d);
             } else if (spec && *spec) {
@@ -308,14 +328,16 @@ static int any_mirror(const scene *s)
     return 0;
 }
 
-/* The kernel build options for a scene: every feature flag is decided here. */
+/* The kernel build options for a scene: every feature flag is decided here.
+ * CLWHITTED_BUILD_OPTIONS, if set, is appended (e.g. -cl-fast-relaxed-math). */
 static void scene_build_options(const scene *s, int num_polygons, char *buf, size_t n)
 {
+    const char *extra = getenv("CLWHITTED_BUILD_OPTIONS");
     snprintf(buf, n,
              "-cl-std=CL1.2 -Werror -DCW_HAS_SPHERES=%d -DCW_HAS_TRIANGLES=%d "
-             "-DCW_HAS_POLYGONS=%d -DCW_HAS_MIRRORS=%d",
+             "-DCW_HAS_POLYGONS=%d -DCW_HAS_MIRRORS=%d%s%s",
              s->spheres.count > 0, s->triangles.count > 0, num_polygons > 0,
-             any_mirror(s) && s->max_depth > 1);
+             any_mirror(s) && s->max_depth > 1, extra ? " " : "", extra ? extra : "");
 }
 
 static int build_program(renderer *r, const char *options, char *err, size_t errlen)
@@ -333,8 +355,11 @@ static int build_program(renderer *r, const char *options, char *err, size_t err
     if (e != CL_SUCCESS) {
         size_t len = 0;
         char *log;
-        clGetProgramBuildInfo(r->program, r->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &len);
-        log = malloc(len + 1);
+        cl_int e2 =
+            clGetProgramBuildInfo(r->program, r->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &len);
+        log = e2 == CL_SUCCESS ? malloc(len + 1) : NULL;
+        if (!log)
+            fprintf(stderr, "kernel build log unavailable (%s)\n", cl_error_name(e2));
         if (log && clGetProgramBuildInfo(r->program, r->device, CL_PROGRAM_BUILD_LOG, len, log,
                                          NULL) == CL_SUCCESS) {
             log[len] = '\0';

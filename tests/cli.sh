@@ -51,6 +51,15 @@ check_true "nothing left for a bad extension" test -z "$(ls "$T" | grep -v -e '^
 "$BIN" -o "$T/no/such/dir/x.png" -W 8 -H 6 scenes/default.json >"$T/out" 2>"$T/err"
 check "unwritable output" 1 $?
 
+# a kernel build failure prints the build log and exits 1 (an invalid feature flag hits #error)
+CLWHITTED_BUILD_OPTIONS=-DCW_HAS_MIRRORS=2 \
+    "$BIN" -o "$T/build.png" -W 8 -H 6 scenes/default.json >"$T/out" 2>"$T/err"
+check "kernel build failure" 1 $?
+check_grep "build log printed" "kernel build log" "$T/err"
+check_grep "build log has the #error" "must be 0 or 1" "$T/err"
+check_grep "the failed call is named" "clBuildProgram" "$T/err"
+check_true "no image after a build failure" test ! -e "$T/build.png"
+
 # good renders
 "$BIN" -q -o "$T/small.png" -W 32 -H 24 scenes/default.json >"$T/out" 2>"$T/err"; check "png render" 0 $?
 check_true "png written" test -s "$T/small.png"
