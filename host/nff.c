@@ -1,0 +1,651 @@
+/* The NFF reader (Eric Haines' Neutral File Format, as written by the SPD generators).
+ *
+ * Line-based: every entity keeps its numbers on its own line(s), which is what tells
+ * `l x y z` from `l x y z r g b`. `#` starts a comment anywhere on a line.
+ *
+ * Mapping into the scene model (fixed, so that images match other renderers):
+ *   f r g b Kd Ks Shine T ior  ->  kd = Kd*(r,g,b), ka = kd, ks = km = (Ks,Ks,Ks),
+ *                                  p = Shine, kt = (T,T,T), ior = ior
+ *   objects before the first `f` get a default material: kd = ka = (1,1,1),
+ *   ks = km = kt = 0, p = 1, ior = 1
+ *   l x y z        -> intensity grey sqrt(L)/(2L), L = number of lights in the file
+ *   l x y z r g b  -> intensity (r,g,b)
+ *   ambient        -> grey sqrt(L)/(2L) (0.5 when there are no lights)
+ *   p 3            -> triangle; p n > 3 -> polygon (vertices in poly_verts)
+ *   pp 3           -> smooth triangle (normals normalised); pp n > 3 -> fan of smooth
+ *                     triangles (v0, vi, vi+1)
+ *   c              -> cone: base and apex either on two lines after `c` (the format's
+ *                     definition) or as eight numbers on the `c` line itself (what the SPD
+ *                     generators write for rings and tree)
+ *   v              -> perspective camera: eye = from, basis from at - from and up,
+ *                     nff_angle_deg = angle, d = 1, image size = resolution; hither is read
+ *                     and ignored
+ */
+#include "scene.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define NFF_MAX_TOKENS 16        /* tokens kept per line; more are only counted */
+#define NFF_MAX_ABS 1e30         /* larger magnitudes are rejected */
+#define NFF_MAX_VERTS 10000000.0 /* largest vertex count accepted for p / pp */
+
+typedef struct {
+    char *cur, *end; /* unread part of the NUL-terminated, writable copy of the text */
+    long line;       /* number of the current line (1-based) */
+    char *tok[NFF_MAX_TOKENS];
+    int ntok;    /* tokens on the current line (can exceed NFF_MAX_TOKENS) */
+    int pending; /* the current line is to be handed out again by next_content() */
+    int entities;
+    const char *name; /* for messages */
+    char *err;
+    size_t errlen;
+    scene *s;
+    int material; /* index of the current material, -1 before the first use */
+    /* what the current line belongs to, for messages */
+    const char *ent; /* entity keyword */
+    long ent_n;      /* vertex count for p / pp, 0 otherwise */
+    long ent_line;   /* line of the entity keyword */
+    long vertex;     /* 1-based vertex (or cone end) of the current line, 0 on the keyword line */
+} nff_reader;
+
+#if defined(__GNUC__)
+static int fail(nff_reader *r, long line, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+#endif
+
+static int fail(nff_reader *r, long line, const char *fmt, ...)
+{
+    va_list ap;
+    int n;
+    if (!r->err || r->errlen == 0)
+        return -1;
+    n = snprintf(r->err, r->errlen, "%s:%ld: ", r->name, line > 0 ? line : 1);
+    if (n >= 0 && (size_t)n < r->errlen) {
+        va_start(ap, fmt);
+        vsnprintf(r->err + n, r->errlen - (size_t)n, fmt, ap);
+        va_end(ap);
+    }
+    return -1;
+}
+
+static int oom(nff_reader *r)
+{
+    return fail(r, r->line, "out of memory");
+}
+
+static int is_blank(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+}
+
+/* Splits the next line into NUL-terminated tokens, dropping any comment. Returns 0 at the
+ * end of the text. */
+static int next_line(nff_reader *r)
+{
+    char *p, *eol;
+    if (r->cur >= r->end)
+        return 0;
+    p = r->cur;
+    eol = memchr(p, '\n', (size_t)(r->end - p));
+    if (!eol)
+        eol = r->end; /* the text is NUL-terminated there */
+    *eol = '\0';
+    r->cur = eol + 1;
+    r->line++;
+    r->ntok = 0;
+    for (;;) {
+        while (is_blank(*p))
+            p++;
+        if (*p == '\0' || *p == '#')
+            break;
+        if (r->ntok < NFF_MAX_TOKENS)
+            r->tok[r->ntok] = p;
+        r->ntok++;
+        while (*p != '\0' && *p != '#' && !is_blank(*p))
+            p++;
+        if (*p == '#') {
+            *p = '\0';
+            break;
+        }
+        if (*p != '\0')
+            *p++ = '\0';
+    }
+    return 1;
+}
+
+/* Moves to the next line with tokens. Returns 0 at the end of the text. */
+static int next_content(nff_reader *r)
+{
+    if (r->pending) {
+        r->pending = 0;
+        return 1;
+    }
+    while (next_line(r))
+        if (r->ntok > 0)
+            return 1;
+    return 0;
+}
+
+/* Describes where the current line sits, e.g. "after 's'" or "for vertex 2 of 'p 5' (line 9)". */
+static void context(const nff_reader *r, char *buf, size_t len)
+{
+    if (r->vertex == 0)
+        snprintf(buf, len, "after '%s'", r->ent);
+    else if (r->ent_n > 0)
+        snprintf(buf, len, "for vertex %ld of '%s %ld' (line %ld)", r->vertex, r->ent, r->ent_n,
+                 r->ent_line);
+    else
+        snprintf(buf, len, "for the %s of '%s' (line %ld)", r->vertex == 1 ? "base" : "apex",
+                 r->ent, r->ent_line);
+}
+
+/* Converts token i: a finite number of magnitude at most 1e30, the whole token. */
+static int number(nff_reader *r, int i, double *out)
+{
+    const char *t = r->tok[i];
+    char *end;
+    double x = strtod(t, &end);
+    char ctx[96];
+    if (end == t || *end != '\0') {
+        context(r, ctx, sizeof ctx);
+        return fail(r, r->line, "expected a number %s, found '%.40s'", ctx, t);
+    }
+    if (!isfinite(x) || fabs(x) > NFF_MAX_ABS) {
+        context(r, ctx, sizeof ctx);
+        return fail(r, r->line, "number '%.40s' %s is %s", t, ctx,
+                    isfinite(x) ? "out of range (magnitude above 1e30)" : "not finite");
+    }
+    *out = x;
+    return 0;
+}
+
+/* Reads exactly n numbers (named by `fields`) from token `first` on. Non-numbers are
+ * reported before a wrong count, so that a missing line reads as such. */
+static int numbers(nff_reader *r, int first, int n, double *out, const char *fields)
+{
+    int found = r->ntok - first, i;
+    char ctx[96];
+    for (i = 0; i < found && i < n; i++)
+        if (number(r, first + i, &out[i]) != 0)
+            return -1;
+    if (found != n) {
+        context(r, ctx, sizeof ctx);
+        return fail(r, r->line, "expected %d number%s (%s) %s, found %d", n, n == 1 ? "" : "s",
+                    fields, ctx, found);
+    }
+    return 0;
+}
+
+/* Token i as an integer in lo..hi (written as a number with no fraction). */
+static int integer(nff_reader *r, int i, double lo, double hi, const char *what, long *out)
+{
+    double x;
+    if (number(r, i, &x) != 0)
+        return -1;
+    if (x != floor(x) || x < lo || x > hi)
+        return fail(r, r->line, "%s must be an integer in %.0f..%.0f, found '%.40s'", what, lo, hi,
+                    r->tok[i]);
+    *out = (long)x;
+    return 0;
+}
+
+static vec3f v3(const double *d)
+{
+    return vec3f_make((float)d[0], (float)d[1], (float)d[2]);
+}
+
+static void begin(nff_reader *r, const char *ent, long n)
+{
+    r->ent = ent;
+    r->ent_n = n;
+    r->ent_line = r->line;
+    r->vertex = 0;
+}
+
+/* The index of the current material, creating the default one on first use. */
+static int current_material(nff_reader *r)
+{
+    if (r->material < 0) {
+        scene_material m;
+        long i;
+        memset(&m, 0, sizeof m);
+        m.kd = m.ka = vec3f_make(1, 1, 1);
+        m.p = 1;
+        m.ior = 1;
+        i = scene_push(&r->s->materials, &m, sizeof m);
+        if (i < 0)
+            return oom(r);
+        r->material = (int)i;
+    }
+    return r->material;
+}
+
+static int push(nff_reader *r, scene_array *a, const void *elem, size_t size)
+{
+    return scene_push(a, elem, size) < 0 ? oom(r) : 0;
+}
+
+/* v: the viewpoint block, six lines in any order. */
+static int parse_view(nff_reader *r)
+{
+    static const char *const keys[6] = {"from", "at", "up", "angle", "hither", "resolution"};
+    static const char *const fields[6] = {"x y z", "x y z", "x y z", "deg", "d", "w h"};
+    static const int counts[6] = {3, 3, 3, 1, 1, 2};
+    long seen[6] = {0, 0, 0, 0, 0, 0};
+    double val[6][3];
+    long v_line = r->line, w = 0, h = 0;
+    int k, eof = 0;
+    scene_camera *c = &r->s->camera;
+    vec3f from, at, up;
+
+    if (r->ntok != 1)
+        return fail(r, r->line,
+                    "expected nothing after 'v' (its values follow on six lines), found '%.40s'",
+                    r->tok[1]);
+    for (;;) {
+        if (!next_content(r)) {
+            eof = 1;
+            break;
+        }
+        for (k = 0; k < 6; k++)
+            if (strcmp(r->tok[0], keys[k]) == 0)
+                break;
+        if (k == 6) {
+            r->pending = 1; /* the next entity */
+            break;
+        }
+        if (seen[k])
+            return fail(r, r->line,
+                        "second '%s' line in the 'v' block (line %ld); the first is at line %ld",
+                        keys[k], v_line, seen[k]);
+        seen[k] = r->line;
+        begin(r, keys[k], 0);
+        if (numbers(r, 1, counts[k], val[k], fields[k]) != 0)
+            return -1;
+        if (k == 5 && (integer(r, 1, 1, 65536, "'resolution' width", &w) != 0 ||
+                       integer(r, 2, 1, 65536, "'resolution' height", &h) != 0))
+            return -1;
+    }
+    for (k = 0; k < 6; k++) {
+        if (seen[k])
+            continue;
+        if (eof)
+            return fail(r, r->line, "file ended inside the 'v' block (line %ld): no '%s' line",
+                        v_line, keys[k]);
+        return fail(
+            r, r->line,
+            "the 'v' block (line %ld) has no '%s' line (it needs from, at, up, angle, hither "
+            "and resolution), found '%.40s'",
+            v_line, keys[k], r->tok[0]);
+    }
+    if (!(val[3][0] > 0.0 && val[3][0] < 180.0))
+        return fail(r, seen[3], "'angle' must lie strictly between 0 and 180 degrees, found %g",
+                    val[3][0]);
+    from = v3(val[0]);
+    at = v3(val[1]);
+    up = v3(val[2]);
+    if (from.x == at.x && from.y == at.y && from.z == at.z)
+        return fail(r, seen[1], "'at' equals 'from': no view direction");
+    if (scene_camera_basis(c, vec3f_sub(at, from), up) != 0)
+        return fail(r, seen[2], "'up' is zero or parallel to the view direction (at - from)");
+    c->projection = SCENE_PERSPECTIVE;
+    c->eye = from;
+    c->nff_angle_deg = (float)val[3][0];
+    c->d = 1.0f;
+    r->s->width = (int)w;
+    r->s->height = (int)h;
+    return 0;
+}
+
+/* p n / pp n and their vertex lines. */
+static int parse_polygon(nff_reader *r, int patch)
+{
+    const char *kw = patch ? "pp" : "p";
+    long n, i;
+    int mat;
+    double d[6];
+    vec3f p[3], nrm[3];
+    scene_triangle tri;
+    scene_array *verts = &r->s->poly_verts;
+    size_t first = verts->count;
+
+    if (r->ntok != 2)
+        return fail(r, r->line, "expected the vertex count after '%s' (%s n), found %d values", kw,
+                    kw, r->ntok - 1);
+    begin(r, kw, 0);
+    if (number(r, 1, &d[0]) != 0)
+        return -1;
+    if (d[0] < 3)
+        return fail(r, r->line, "'%s' needs at least 3 vertices, found %s", kw, r->tok[1]);
+    if (integer(r, 1, 3, NFF_MAX_VERTS, patch ? "the 'pp' vertex count" : "the 'p' vertex count",
+                &n) != 0)
+        return -1;
+    if ((mat = current_material(r)) < 0)
+        return -1;
+    begin(r, kw, n);
+    memset(&tri, 0, sizeof tri);
+    tri.material = mat;
+    tri.has_normals = patch;
+    for (i = 0; i < n; i++) {
+        vec3f q, qn = vec3f_make(0, 0, 0);
+        if (!next_content(r))
+            return fail(
+                r, r->line,
+                "file ended inside '%s %ld' (line %ld): expected %ld vertex lines, found %ld", kw,
+                n, r->ent_line, n, i);
+        r->vertex = i + 1;
+        if (numbers(r, 0, patch ? 6 : 3, d, patch ? "x y z nx ny nz" : "x y z") != 0)
+            return -1;
+        q = v3(d);
+        if (patch && vec3f_normalize(v3(d + 3), &qn) != 0)
+            return fail(r, r->line, "zero normal for vertex %ld of 'pp %ld' (line %ld)", i + 1, n,
+                        r->ent_line);
+        if (!patch && n > 3) {
+            if (push(r, verts, &q, sizeof q) != 0)
+                return -1;
+            continue;
+        }
+        /* triangles: p 3, pp 3, and the fan (v0, v[i-1], v[i]) of pp n */
+        if (i < 3) {
+            p[i] = q;
+            nrm[i] = qn;
+        } else {
+            p[1] = p[2];
+            nrm[1] = nrm[2];
+            p[2] = q;
+            nrm[2] = qn;
+        }
+        if (i >= 2) {
+            memcpy(tri.p, p, sizeof p);
+            memcpy(tri.n, nrm, sizeof nrm);
+            if (push(r, &r->s->triangles, &tri, sizeof tri) != 0)
+                return -1;
+        }
+    }
+    if (!patch && n > 3) {
+        scene_polygon poly;
+        poly.first = (int)first;
+        poly.count = (int)n;
+        poly.material = mat;
+        if (push(r, &r->s->polygons, &poly, sizeof poly) != 0)
+            return -1;
+    }
+    return 0;
+}
+
+/* c: base and apex, on the `c` line itself or on the two lines after it. */
+static int parse_cone(nff_reader *r)
+{
+    scene_cone cone;
+    double d[8];
+    int mat;
+    begin(r, "c", 0);
+    if (r->ntok == 9) {
+        if (numbers(r, 1, 8, d, "base x y z r, apex x y z r") != 0)
+            return -1;
+    } else if (r->ntok == 1) {
+        int i;
+        for (i = 0; i < 2; i++) {
+            if (!next_content(r))
+                return fail(r, r->line,
+                            "file ended inside 'c' (line %ld): expected 2 lines (base x y z r, "
+                            "apex x y z r), found %d",
+                            r->ent_line, i);
+            r->vertex = i + 1;
+            if (numbers(r, 0, 4, d + 4 * i, "x y z r") != 0)
+                return -1;
+        }
+    } else {
+        return fail(r, r->line,
+                    "expected nothing after 'c' (base and apex on the next two lines) or 8 numbers "
+                    "(base x y z r apex x y z r), found %d",
+                    r->ntok - 1);
+    }
+    if ((mat = current_material(r)) < 0)
+        return -1;
+    cone.base = v3(d);
+    cone.base_radius = (float)d[3];
+    cone.apex = v3(d + 4);
+    cone.apex_radius = (float)d[7];
+    cone.material = mat;
+    if (cone.base.x == cone.apex.x && cone.base.y == cone.apex.y && cone.base.z == cone.apex.z)
+        return fail(r, r->line, "cone base and apex coincide (cone at line %ld)", r->ent_line);
+    return push(r, &r->s->cones, &cone, sizeof cone);
+}
+
+static int parse_entity(nff_reader *r, long *v_line)
+{
+    const char *kw = r->tok[0];
+    double d[8];
+    r->entities++;
+    begin(r, kw, 0);
+    if (strcmp(kw, "v") == 0) {
+        if (*v_line)
+            return fail(r, r->line, "second 'v' viewpoint block (the first is at line %ld)",
+                        *v_line);
+        *v_line = r->line;
+        return parse_view(r);
+    }
+    if (strcmp(kw, "b") == 0) {
+        if (numbers(r, 1, 3, d, "r g b") != 0)
+            return -1;
+        r->s->background = v3(d);
+        return 0;
+    }
+    if (strcmp(kw, "l") == 0) {
+        scene_light l;
+        int n = r->ntok - 1, i;
+        for (i = 0; i < n && i < 6; i++)
+            if (number(r, 1 + i, &d[i]) != 0)
+                return -1;
+        if (n != 3 && n != 6)
+            return fail(r, r->line,
+                        "expected 3 numbers after 'l' (x y z) or 6 (x y z r g b), found %d", n);
+        l.position = v3(d);
+        /* NaN marks "no colour" until the number of lights is known (input is never NaN) */
+        l.intensity = n == 6 ? v3(d + 3) : vec3f_make(NAN, NAN, NAN);
+        return push(r, &r->s->lights, &l, sizeof l);
+    }
+    if (strcmp(kw, "f") == 0) {
+        scene_material m;
+        long i;
+        if (numbers(r, 1, 8, d, "r g b Kd Ks Shine T ior") != 0)
+            return -1;
+        m.kd = vec3f_make((float)(d[3] * d[0]), (float)(d[3] * d[1]), (float)(d[3] * d[2]));
+        m.ka = m.kd;
+        m.ks = m.km = vec3f_make((float)d[4], (float)d[4], (float)d[4]);
+        m.p = (float)d[5];
+        m.kt = vec3f_make((float)d[6], (float)d[6], (float)d[6]);
+        m.ior = (float)d[7];
+        i = scene_push(&r->s->materials, &m, sizeof m);
+        if (i < 0)
+            return oom(r);
+        r->material = (int)i;
+        return 0;
+    }
+    if (strcmp(kw, "s") == 0) {
+        scene_sphere sp;
+        int mat;
+        if (numbers(r, 1, 4, d, "cx cy cz r") != 0)
+            return -1;
+        if (d[3] == 0.0)
+            return fail(r, r->line, "sphere radius must not be zero");
+        if ((mat = current_material(r)) < 0)
+            return -1;
+        sp.center = v3(d);
+        sp.radius = (float)d[3];
+        sp.material = mat;
+        return push(r, &r->s->spheres, &sp, sizeof sp);
+    }
+    if (strcmp(kw, "p") == 0)
+        return parse_polygon(r, 0);
+    if (strcmp(kw, "pp") == 0)
+        return parse_polygon(r, 1);
+    if (strcmp(kw, "c") == 0)
+        return parse_cone(r);
+    {
+        int view_key = strcmp(kw, "from") == 0 || strcmp(kw, "at") == 0 || strcmp(kw, "up") == 0 ||
+                       strcmp(kw, "angle") == 0 || strcmp(kw, "hither") == 0 ||
+                       strcmp(kw, "resolution") == 0;
+        return fail(r, r->line, "unknown entity '%.40s' (expected one of v b l f s p pp c #)%s", kw,
+                    view_key ? "; it belongs inside a 'v' block" : "");
+    }
+}
+
+/* Sets s->name to the base name of path without its extension. */
+static int set_name(scene *s, const char *path)
+{
+    const char *base = strrchr(path, '/'), *dot;
+    size_t n;
+    base = base ? base + 1 : path;
+    dot = strrchr(base, '.');
+    n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    if (n == 0) {
+        base = "scene";
+        n = 5;
+    }
+    free(s->name);
+    s->name = malloc(n + 1);
+    if (!s->name)
+        return -1;
+    memcpy(s->name, base, n);
+    s->name[n] = '\0';
+    return 0;
+}
+
+/* Parses buf[0..len), which must be writable and have buf[len] == '\0'. */
+static int parse_buffer(char *buf, size_t len, const char *name, scene *s, char *err, size_t errlen)
+{
+    nff_reader r;
+    long v_line = 0;
+    size_t i, nl;
+    memset(&r, 0, sizeof r);
+    r.cur = buf;
+    r.end = buf + len;
+    r.name = name;
+    r.err = err;
+    r.errlen = errlen;
+    r.s = s;
+    r.material = -1;
+
+    if (set_name(s, name) != 0)
+        return fail(&r, 1, "out of memory");
+    {
+        const char *nul = memchr(buf, '\0', len);
+        if (nul) {
+            long line = 1;
+            for (i = 0; i < (size_t)(nul - buf); i++)
+                line += buf[i] == '\n';
+            return fail(&r, line, "unexpected NUL byte (not a text file?)");
+        }
+    }
+    while (next_content(&r))
+        if (parse_entity(&r, &v_line) != 0)
+            return -1;
+    if (r.entities == 0)
+        return fail(&r, r.line, "empty file: no NFF entities (expected one of v b l f s p pp c)");
+    if (!v_line)
+        return fail(&r, r.line, "no 'v' viewpoint block");
+
+    nl = s->lights.count;
+    {
+        float g = nl ? (float)(sqrt((double)nl) / (2.0 * (double)nl)) : 0.5f;
+        for (i = 0; i < nl; i++) {
+            scene_light *l = &SCENE_AT(s->lights, scene_light, i);
+            if (isnan(l->intensity.x))
+                l->intensity = vec3f_make(g, g, g);
+        }
+        s->ambient = vec3f_make(g, g, g);
+    }
+    return 0;
+}
+
+int nff_parse(const char *text, size_t len, const char *name, scene *s, char *err, size_t errlen)
+{
+    char *buf = malloc(len + 1);
+    int rc;
+    if (!buf) {
+        snprintf(err, errlen, "%s:1: out of memory", name);
+        return -1;
+    }
+    memcpy(buf, text, len);
+    buf[len] = '\0';
+    rc = parse_buffer(buf, len, name, s, err, errlen);
+    free(buf);
+    return rc;
+}
+
+/* Reads a whole file into a NUL-terminated buffer. */
+static int read_file(const char *path, char **out, size_t *outlen, char *err, size_t errlen)
+{
+    struct stat st;
+    FILE *f;
+    char *buf = NULL;
+    size_t len = 0, cap = 65536, want = 0;
+    if (stat(path, &st) == 0) {
+        if (S_ISDIR(st.st_mode)) {
+            snprintf(err, errlen, "%s: cannot read: %s", path, strerror(EISDIR));
+            return -1;
+        }
+        if (S_ISREG(st.st_mode) && st.st_size > 0)
+            want = (size_t)st.st_size + 2; /* one read, then one more to see the end */
+    }
+    f = fopen(path, "rb");
+    if (!f) {
+        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        return -1;
+    }
+    if (want > cap)
+        cap = want;
+    for (;;) {
+        size_t n;
+        if (!buf || cap - len < 2) {
+            char *nb;
+            if (buf)
+                cap *= 2;
+            nb = realloc(buf, cap);
+            if (!nb) {
+                free(buf);
+                fclose(f);
+                snprintf(err, errlen, "%s: out of memory", path);
+                return -1;
+            }
+            buf = nb;
+        }
+        n = fread(buf + len, 1, cap - len - 1, f);
+        len += n;
+        if (n == 0) {
+            if (ferror(f)) {
+                int e = errno;
+                free(buf);
+                fclose(f);
+                snprintf(err, errlen, "%s: cannot read: %s", path, strerror(e));
+                return -1;
+            }
+            break;
+        }
+    }
+    fclose(f);
+    buf[len] = '\0';
+    *out = buf;
+    *outlen = len;
+    return 0;
+}
+
+int nff_load(const char *path, scene *s, char *err, size_t errlen)
+{
+    char *buf;
+    size_t len;
+    int rc;
+    if (read_file(path, &buf, &len, err, errlen) != 0)
+        return -1;
+    rc = parse_buffer(buf, len, path, s, err, errlen);
+    free(buf);
+    return rc;
+}
