@@ -3,6 +3,7 @@
 const char *cl_error_name(cl_int err)
 {
     switch (err) {
+        /* clang-format off */
 #define E(x) case x: return #x;
     E(CL_SUCCESS)
     E(CL_DEVICE_NOT_FOUND)
@@ -64,6 +65,7 @@ const char *cl_error_name(cl_int err)
     E(CL_INVALID_LINKER_OPTIONS)
     E(CL_INVALID_DEVICE_PARTITION_COUNT)
 #undef E
+        /* clang-format on */
     case -1001:
         return "CL_PLATFORM_NOT_FOUND_KHR";
     default:

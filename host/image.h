@@ -26,10 +26,10 @@ int image_read_exr(const char *path, image *img, char *err, size_t errlen);
 int image_read_png(const char *path, int srgb_decode, image *img, char *err, size_t errlen);
 
 typedef struct {
-    double max_abs;      /* largest absolute channel difference over compared pixels */
-    double mean_abs;     /* mean absolute channel difference over compared pixels */
-    long compared;       /* pixels compared (mask != 0) */
-    long over;           /* compared pixels with any channel differing by more than tol */
+    double max_abs;  /* largest absolute channel difference over compared pixels */
+    double mean_abs; /* mean absolute channel difference over compared pixels */
+    long compared;   /* pixels compared (mask != 0) */
+    long over;       /* compared pixels with any channel differing by more than tol */
     int worst_x, worst_y;
 } image_diff_stats;
 

@@ -90,13 +90,16 @@ static void warn_unrendered(const scene *s)
 int main(int argc, char **argv)
 {
     enum { OPT_DEVICE = 256, OPT_LIST, OPT_VERSION };
-    static const struct option longopts[] = {
-        {"output", required_argument, NULL, 'o'}, {"width", required_argument, NULL, 'W'},
-        {"height", required_argument, NULL, 'H'}, {"depth", required_argument, NULL, 'd'},
-        {"device", required_argument, NULL, OPT_DEVICE},
-        {"list-devices", no_argument, NULL, OPT_LIST},
-        {"quiet", no_argument, NULL, 'q'},        {"help", no_argument, NULL, 'h'},
-        {"version", no_argument, NULL, OPT_VERSION}, {NULL, 0, NULL, 0}};
+    static const struct option longopts[] = {{"output", required_argument, NULL, 'o'},
+                                             {"width", required_argument, NULL, 'W'},
+                                             {"height", required_argument, NULL, 'H'},
+                                             {"depth", required_argument, NULL, 'd'},
+                                             {"device", required_argument, NULL, OPT_DEVICE},
+                                             {"list-devices", no_argument, NULL, OPT_LIST},
+                                             {"quiet", no_argument, NULL, 'q'},
+                                             {"help", no_argument, NULL, 'h'},
+                                             {"version", no_argument, NULL, OPT_VERSION},
+                                             {NULL, 0, NULL, 0}};
     const char *output = NULL, *device = NULL;
     char *default_out = NULL;
     int width = 0, height = 0, depth = 0, quiet = 0, list = 0, c, rc = 1;

@@ -68,8 +68,9 @@ static int get_platforms(cl_platform_id **out, cl_uint *count, char *err, size_t
     cl_uint n = 0;
     cl_int e = clGetPlatformIDs(0, NULL, &n);
     if (e == -1001 /* CL_PLATFORM_NOT_FOUND_KHR */ || (e == CL_SUCCESS && n == 0)) {
-        snprintf(err, errlen, "no OpenCL platform found (install pocl-opencl-icd: "
-                              "sh tools/install-deps)");
+        snprintf(err, errlen,
+                 "no OpenCL platform found (install pocl-opencl-icd: "
+                 "sh tools/install-deps)");
         return -1;
     }
     if (e != CL_SUCCESS)
@@ -219,8 +220,9 @@ static int find_device(const char *spec, cl_device_id *out, char *err, size_t er
         if (spec && *spec)
             snprintf(err, errlen, "no OpenCL device matches '%s' (see --list-devices)", spec);
         else
-            snprintf(err, errlen, "no OpenCL device found (install pocl-opencl-icd: "
-                                  "sh tools/install-deps)");
+            snprintf(err, errlen,
+                     "no OpenCL device found (install pocl-opencl-icd: "
+                     "sh tools/install-deps)");
         return -1;
     }
     return 0;
@@ -413,8 +415,8 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
         data = zero;
         count = 1;
     }
-    *m = clCreateBuffer(r->ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * size,
-                        (void *)data, &e);
+    *m = clCreateBuffer(r->ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * size, (void *)data,
+                        &e);
     free(zero);
     if (e != CL_SUCCESS) {
         char call[96];
@@ -440,8 +442,7 @@ static double newell(const vec3f *v, int n, double out[3])
     return len;
 }
 
-static int convert_polygons(const scene *s, cw_polygon **out, int *count, char *err,
-                            size_t errlen)
+static int convert_polygons(const scene *s, cw_polygon **out, int *count, char *err, size_t errlen)
 {
     size_t i, n = s->polygons.count;
     int k = 0;
@@ -566,8 +567,7 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
         goto out_free;
     if (upload(r, &r->frame, f, 1, sizeof *f, "frame", err, errlen) ||
         upload(r, &r->spheres, sph, s->spheres.count, sizeof *sph, "spheres", err, errlen) ||
-        upload(r, &r->triangles, tri, s->triangles.count, sizeof *tri, "triangles", err,
-               errlen) ||
+        upload(r, &r->triangles, tri, s->triangles.count, sizeof *tri, "triangles", err, errlen) ||
         upload(r, &r->polygons, pg, (size_t)npoly, sizeof *pg, "polygons", err, errlen) ||
         upload(r, &r->verts, verts, s->poly_verts.count, sizeof *verts, "polygon vertices", err,
                errlen) ||
@@ -633,8 +633,7 @@ static int set_arg(cl_kernel k, cl_uint i, size_t size, const void *v, const cha
 
 /* Sets the frame and world arguments shared by the intersection and shading kernels:
  * indices 0..4. */
-static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err,
-                          size_t errlen)
+static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err, size_t errlen)
 {
     return set_arg(k, 0, sizeof(cl_mem), &r->frame, kname, r, err, errlen) ||
            set_arg(k, 1, sizeof(cl_mem), &r->spheres, kname, r, err, errlen) ||
@@ -643,8 +642,7 @@ static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err
            set_arg(k, 4, sizeof(cl_mem), &r->verts, kname, r, err, errlen);
 }
 
-static int launch(renderer *r, cl_kernel k, size_t n, const char *kname, char *err,
-                  size_t errlen)
+static int launch(renderer *r, cl_kernel k, size_t n, const char *kname, char *err, size_t errlen)
 {
     size_t global = (n + 63) / 64 * 64;
     cl_int e = clEnqueueNDRangeKernel(r->queue, k, 1, NULL, &global, NULL, 0, NULL, NULL);
@@ -675,10 +673,8 @@ static int run_raygen(renderer *r, size_t n, char *err, size_t errlen)
 static int run_intersect(renderer *r, cl_int n, char *err, size_t errlen)
 {
     return set_world_args(r, r->k_intersect, "cw_intersect", err, errlen) ||
-           set_arg(r->k_intersect, 5, sizeof(cl_mem), &r->rays, "cw_intersect", r, err,
-                   errlen) ||
-           set_arg(r->k_intersect, 6, sizeof(cl_mem), &r->hits, "cw_intersect", r, err,
-                   errlen) ||
+           set_arg(r->k_intersect, 5, sizeof(cl_mem), &r->rays, "cw_intersect", r, err, errlen) ||
+           set_arg(r->k_intersect, 6, sizeof(cl_mem), &r->hits, "cw_intersect", r, err, errlen) ||
            set_arg(r->k_intersect, 7, sizeof n, &n, "cw_intersect", r, err, errlen) ||
            launch(r, r->k_intersect, (size_t)n, "cw_intersect", err, errlen);
 }
@@ -697,8 +693,7 @@ static int run_shade(renderer *r, cl_int n, char *err, size_t errlen)
            launch(r, r->k_shade, (size_t)n, k, err, errlen);
 }
 
-static int fill_zero(renderer *r, cl_mem m, size_t size, const char *what, char *err,
-                     size_t errlen)
+static int fill_zero(renderer *r, cl_mem m, size_t size, const char *what, char *err, size_t errlen)
 {
     cl_int zero = 0;
     cl_int e = clEnqueueFillBuffer(r->queue, m, &zero, sizeof zero, 0, size, 0, NULL, NULL);
@@ -710,8 +705,8 @@ static int fill_zero(renderer *r, cl_mem m, size_t size, const char *what, char 
     return 0;
 }
 
-static int read_buffer(renderer *r, cl_mem m, size_t size, void *dst, const char *what,
-                       char *err, size_t errlen)
+static int read_buffer(renderer *r, cl_mem m, size_t size, void *dst, const char *what, char *err,
+                       size_t errlen)
 {
     cl_int e = clEnqueueReadBuffer(r->queue, m, CL_TRUE, 0, size, dst, 0, NULL, NULL);
     if (e != CL_SUCCESS) {
@@ -790,8 +785,8 @@ int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, cha
     }
     if (ensure_work(r, (size_t)n, err, errlen))
         return -1;
-    e = clEnqueueWriteBuffer(r->queue, r->rays, CL_TRUE, 0, (size_t)n * sizeof *rays, rays, 0,
-                             NULL, NULL);
+    e = clEnqueueWriteBuffer(r->queue, r->rays, CL_TRUE, 0, (size_t)n * sizeof *rays, rays, 0, NULL,
+                             NULL);
     if (e != CL_SUCCESS)
         return cl_fail(e, "clEnqueueWriteBuffer(rays)", r, err, errlen);
     if (run_intersect(r, n, err, errlen) ||

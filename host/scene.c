@@ -126,8 +126,9 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
         s->max_depth = max_depth;
     if (s->width <= 0 || s->height <= 0 || s->width > 65536 || s->height > 65536 ||
         (long long)s->width * s->height > (1LL << 28)) {
-        snprintf(err, errlen, "%s: image size %dx%d out of range (1..65536 per side, at most 2^28 pixels)",
-                 name, s->width, s->height);
+        snprintf(err, errlen,
+                 "%s: image size %dx%d out of range (1..65536 per side, at most 2^28 pixels)", name,
+                 s->width, s->height);
         return -1;
     }
     if (s->max_depth < 1 || s->max_depth > 64) {
@@ -145,9 +146,8 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
         c->b = -c->t;
         c->d = 1.0f;
     }
-    if (!finite3(c->eye) || !finite3(c->u) || !finite3(c->v) || !finite3(c->w) ||
-        !isfinite(c->l) || !isfinite(c->r) || !isfinite(c->b) || !isfinite(c->t) ||
-        !isfinite(c->d)) {
+    if (!finite3(c->eye) || !finite3(c->u) || !finite3(c->v) || !finite3(c->w) || !isfinite(c->l) ||
+        !isfinite(c->r) || !isfinite(c->b) || !isfinite(c->t) || !isfinite(c->d)) {
         snprintf(err, errlen, "%s: camera has non-finite values", name);
         return -1;
     }
@@ -167,9 +167,10 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
     }
     if (c->projection == SCENE_OBLIQUE) {
         if (vec3f_normalize(c->dir, &c->dir) != 0 || vec3f_dot(c->dir, c->w) >= 0.0f) {
-            snprintf(err, errlen,
-                     "%s: oblique camera direction must be non-zero and point into the view (-w side)",
-                     name);
+            snprintf(
+                err, errlen,
+                "%s: oblique camera direction must be non-zero and point into the view (-w side)",
+                name);
             return -1;
         }
     }

@@ -45,7 +45,7 @@ typedef struct {
 
 typedef struct {
     vec3f p[3];
-    vec3f n[3];      /* vertex normals, used when has_normals */
+    vec3f n[3]; /* vertex normals, used when has_normals */
     int has_normals;
     int material;
 } scene_triangle;

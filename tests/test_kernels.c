@@ -182,8 +182,7 @@ static void test_camera_perspective_basis(void **state)
      * (0,0,1). 1x1 image, window [-1,1]^2: the single ray goes straight ahead. */
     base_scene(&s, SCENE_PERSPECTIVE, 1, 1);
     s.camera.eye = vec3f_make(1, 2, 3);
-    assert_int_equal(
-        scene_camera_basis(&s.camera, vec3f_make(1, 0, 0), vec3f_make(0, 0, 1)), 0);
+    assert_int_equal(scene_camera_basis(&s.camera, vec3f_make(1, 0, 0), vec3f_make(0, 0, 1)), 0);
     rays = gen_rays(&s);
     assert_vec(rays[0].origin, 1, 2, 3, 0, "origin");
     assert_vec(rays[0].dir, 1, 0, 0, 1e-6, "dir");
@@ -191,8 +190,7 @@ static void test_camera_perspective_basis(void **state)
     /* 2x1 image: left pixel at u = -0.5, i.e. 0.5 along -u = +y */
     base_scene(&s, SCENE_PERSPECTIVE, 2, 1);
     s.camera.eye = vec3f_make(1, 2, 3);
-    assert_int_equal(
-        scene_camera_basis(&s.camera, vec3f_make(1, 0, 0), vec3f_make(0, 0, 1)), 0);
+    assert_int_equal(scene_camera_basis(&s.camera, vec3f_make(1, 0, 0), vec3f_make(0, 0, 1)), 0);
     rays = gen_rays(&s);
     assert_vec(rays[0].dir, 1 / sqrt(1.25), 0.5 / sqrt(1.25), 0, 1e-6, "dir left");
     free(rays);
@@ -370,9 +368,9 @@ static void test_closest_hit(void **state)
     for (i = 0; i < 4; i++)
         v[i] = vec3f_make(sq[i][0] + 5, sq[i][1], -3);
     add_polygon(&s, v, 4, m);
-    rays[0] = make_ray(0, 0, 0, 0, 0, -1);  /* sphere 1 at t=5 before triangle and sphere 0 */
+    rays[0] = make_ray(0, 0, 0, 0, 0, -1);    /* sphere 1 at t=5 before triangle and sphere 0 */
     rays[1] = make_ray(0, 0, -7.5, 0, 0, -1); /* past sphere 1: triangle at 0.5 */
-    rays[2] = make_ray(5, 0, 0, 0, 0, -1);  /* only the polygon */
+    rays[2] = make_ray(5, 0, 0, 0, 0, -1);    /* only the polygon */
     trace(&s, rays, 3, hits);
     assert_int_equal(hits[0].kind, CW_PRIM_SPHERE);
     assert_int_equal(hits[0].index, 1);
@@ -414,8 +412,8 @@ static void render_pixel(scene *s, int x, int y, double out[3])
 
 /* The model at point p with normal n seen from direction v (unit, towards the eye):
  * ka Ia + sum over unblocked lights facing the surface of kd I (n.l) + ks I (n.h)^p. */
-static void blinn_phong(const double p[3], const double n[3], const double v[3],
-                        const scene *s, const int *blocked, double out[3])
+static void blinn_phong(const double p[3], const double n[3], const double v[3], const scene *s,
+                        const int *blocked, double out[3])
 {
     const scene_material *m = &SCENE_AT(s->materials, scene_material, 0);
     double ka[3] = {m->ka.x, m->ka.y, m->ka.z}, kd[3] = {m->kd.x, m->kd.y, m->kd.z};
@@ -457,8 +455,8 @@ static void shading_setup(scene *s)
 static void check_pixel(const double got[3], const double want[3], const char *what)
 {
     int c;
-    printf("  %s: got (%.6f %.6f %.6f), formula (%.6f %.6f %.6f)\n", what, got[0], got[1],
-           got[2], want[0], want[1], want[2]);
+    printf("  %s: got (%.6f %.6f %.6f), formula (%.6f %.6f %.6f)\n", what, got[0], got[1], got[2],
+           want[0], want[1], want[2]);
     for (c = 0; c < 3; c++)
         assert_near(got[c], want[c], 2e-5, what);
 }
