@@ -1,6 +1,9 @@
 /* The scene model: growable arrays, defaults, finishing checks, reader dispatch. */
 #include "scene.h"
 
+#include <errno.h>
+#include <sys/stat.h>
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -174,6 +177,63 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
             return -1;
         }
     }
+    return 0;
+}
+
+/* Reads a whole file into a NUL-terminated buffer. */
+int scene_read_file(const char *path, char **out, size_t *outlen, char *err, size_t errlen)
+{
+    struct stat st;
+    FILE *f;
+    char *buf = NULL;
+    size_t len = 0, cap = 65536, want = 0;
+    if (stat(path, &st) == 0) {
+        if (S_ISDIR(st.st_mode)) {
+            snprintf(err, errlen, "%s: cannot read: %s", path, strerror(EISDIR));
+            return -1;
+        }
+        if (S_ISREG(st.st_mode) && st.st_size > 0)
+            want = (size_t)st.st_size + 2; /* one read, then one more to see the end */
+    }
+    f = fopen(path, "rb");
+    if (!f) {
+        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        return -1;
+    }
+    if (want > cap)
+        cap = want;
+    for (;;) {
+        size_t n;
+        if (!buf || cap - len < 2) {
+            char *nb;
+            if (buf)
+                cap *= 2;
+            nb = realloc(buf, cap);
+            if (!nb) {
+                free(buf);
+                fclose(f);
+                snprintf(err, errlen, "%s: out of memory", path);
+                return -1;
+            }
+            buf = nb;
+        }
+        n = fread(buf + len, 1, cap - len - 1, f);
+        len += n;
+        if (n == 0) {
+            if (ferror(f)) {
+                int e = errno;
+                free(buf);
+                fclose(f);
+                snprintf(err, errlen, "%s: cannot read: %s", path, strerror(e));
+                return -1;
+            }
+            break;
+        }
+    }
+    fclose(f);
+    buf[len] = '\0';
+    *out = buf;
+    *outlen = len;
     return 0;
 }
 

@@ -104,6 +104,10 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
  * "file:line: message" in err. */
 int scene_load(const char *path, scene *s, char *err, size_t errlen);
 
+/* Reads a whole file into a malloc'd NUL-terminated buffer (directories and unreadable
+ * files are errors naming the path and the reason). Returns 0, or -1 with err. */
+int scene_read_file(const char *path, char **out, size_t *outlen, char *err, size_t errlen);
+
 /* The readers. *_load reads a file; *_parse reads text in memory, naming it `name` in
  * errors. Both return 0, or -1 with "name:line: message" in err. */
 int nff_load(const char *path, scene *s, char *err, size_t errlen);
