@@ -23,13 +23,11 @@
  */
 #include "scene.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #define NFF_MAX_TOKENS 16        /* tokens kept per line; more are only counted */
 #define NFF_MAX_ABS 1e30         /* larger magnitudes are rejected */

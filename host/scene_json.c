@@ -28,13 +28,11 @@
 #include "scene.h"
 
 #include <cJSON.h>
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #define J_MAX_ABS 1e30
 #define J_MAX_VERTS 10000000
