@@ -185,34 +185,6 @@ static int check_material_index(int m, size_t count, const char *what, size_t i,
     return 0;
 }
 
-/* Newell's normal (normalised) and the plane offset, as the renderer computes them;
- * returns 0 for a degenerate polygon. */
-static int polygon_plane(const vec3f *v, int n, double nn[3], double *off, int *axis)
-{
-    int i;
-    double len;
-    nn[0] = nn[1] = nn[2] = 0.0;
-    for (i = 0; i < n; i++) {
-        vec3f a = v[i], b = v[(i + 1) % n];
-        nn[0] += ((double)a.y - b.y) * ((double)a.z + b.z);
-        nn[1] += ((double)a.z - b.z) * ((double)a.x + b.x);
-        nn[2] += ((double)a.x - b.x) * ((double)a.y + b.y);
-    }
-    len = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
-    if (!(len > 0.0) || !isfinite(len))
-        return 0;
-    nn[0] /= len;
-    nn[1] /= len;
-    nn[2] /= len;
-    *off = 0.0;
-    for (i = 0; i < n; i++)
-        *off += nn[0] * v[i].x + nn[1] * v[i].y + nn[2] * v[i].z;
-    *off /= n;
-    *axis = fabs(nn[0]) > fabs(nn[1]) ? (fabs(nn[0]) > fabs(nn[2]) ? 0 : 2)
-                                      : (fabs(nn[1]) > fabs(nn[2]) ? 1 : 2);
-    return 1;
-}
-
 /* v moved along the dominant axis onto the plane nn.x = off */
 static void onto_plane(vec3f v, const double nn[3], double off, int axis, double out[3])
 {
@@ -430,7 +402,7 @@ static void write_polygons(FILE *f, const scene *s, size_t *skipped)
         const vec3f *v = &SCENE_AT(s->poly_verts, vec3f, p->first);
         double nn[3], off, q[3];
         int axis, k;
-        if (!polygon_plane(v, p->count, nn, &off, &axis)) {
+        if (scene_polygon_plane(v, p->count, nn, &off, &axis) != 0) {
             (*skipped)++; /* no area: the renderer leaves it out as well */
             continue;
         }

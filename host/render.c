@@ -426,22 +426,6 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
     return 0;
 }
 
-/* Newell's normal of a polygon; returns its length (0 for a degenerate polygon). */
-static double newell(const vec3f *v, int n, double out[3])
-{
-    int i;
-    double len;
-    out[0] = out[1] = out[2] = 0.0;
-    for (i = 0; i < n; i++) {
-        vec3f a = v[i], b = v[(i + 1) % n];
-        out[0] += ((double)a.y - b.y) * ((double)a.z + b.z);
-        out[1] += ((double)a.z - b.z) * ((double)a.x + b.x);
-        out[2] += ((double)a.x - b.x) * ((double)a.y + b.y);
-    }
-    len = sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
-    return len;
-}
-
 static int convert_polygons(const scene *s, cw_polygon **out, int *count, char *err, size_t errlen)
 {
     size_t i, n = s->polygons.count;
@@ -454,17 +438,10 @@ static int convert_polygons(const scene *s, cw_polygon **out, int *count, char *
     for (i = 0; i < n; i++) {
         const scene_polygon *sp = &SCENE_AT(s->polygons, scene_polygon, i);
         const vec3f *v = &SCENE_AT(s->poly_verts, vec3f, sp->first);
-        double nn[3], len = newell(v, sp->count, nn), off = 0.0;
-        int j, axis;
-        if (!(len > 0.0))
+        double nn[3], off;
+        int axis;
+        if (scene_polygon_plane(v, sp->count, nn, &off, &axis) != 0)
             continue; /* degenerate: no area, cannot be hit */
-        for (j = 0; j < 3; j++)
-            nn[j] /= len;
-        for (j = 0; j < sp->count; j++)
-            off += nn[0] * v[j].x + nn[1] * v[j].y + nn[2] * v[j].z;
-        off /= sp->count;
-        axis = fabs(nn[0]) > fabs(nn[1]) ? (fabs(nn[0]) > fabs(nn[2]) ? 0 : 2)
-                                         : (fabs(nn[1]) > fabs(nn[2]) ? 1 : 2);
         pg[k].plane.x = (float)nn[0];
         pg[k].plane.y = (float)nn[1];
         pg[k].plane.z = (float)nn[2];

@@ -92,6 +92,37 @@ int vec3f_normalize(vec3f a, vec3f *out)
     return 0;
 }
 
+void scene_newell(const vec3f *v, int n, double out[3])
+{
+    int i;
+    out[0] = out[1] = out[2] = 0.0;
+    for (i = 0; i < n; i++) {
+        vec3f a = v[i], b = v[(i + 1) % n];
+        out[0] += ((double)a.y - b.y) * ((double)a.z + b.z);
+        out[1] += ((double)a.z - b.z) * ((double)a.x + b.x);
+        out[2] += ((double)a.x - b.x) * ((double)a.y + b.y);
+    }
+}
+
+int scene_polygon_plane(const vec3f *v, int n, double normal[3], double *offset, int *axis)
+{
+    double len;
+    int i;
+    scene_newell(v, n, normal);
+    len = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    if (!(len > 0.0) || !isfinite(len))
+        return -1;
+    for (i = 0; i < 3; i++)
+        normal[i] /= len;
+    *offset = 0.0;
+    for (i = 0; i < n; i++)
+        *offset += normal[0] * v[i].x + normal[1] * v[i].y + normal[2] * v[i].z;
+    *offset /= n;
+    *axis = fabs(normal[0]) > fabs(normal[1]) ? (fabs(normal[0]) > fabs(normal[2]) ? 0 : 2)
+                                              : (fabs(normal[1]) > fabs(normal[2]) ? 1 : 2);
+    return 0;
+}
+
 int scene_camera_basis(scene_camera *c, vec3f view, vec3f up)
 {
     vec3f w, u;

@@ -124,6 +124,12 @@ float vec3f_dot(vec3f a, vec3f b);
 float vec3f_length(vec3f a);
 /* Returns 0 and the unit vector, or -1 when a is zero or not finite. */
 int vec3f_normalize(vec3f a, vec3f *out);
+/* Newell's normal of a polygon, not normalised: its length is twice the area. */
+void scene_newell(const vec3f *v, int n, double out[3]);
+/* The plane the renderer uses for a polygon: the unit Newell normal, the mean offset
+ * n.x = offset of the vertices, and the dominant axis of the normal (dropped for the 2-D
+ * inside test). Returns 0, or -1 for a degenerate polygon. */
+int scene_polygon_plane(const vec3f *v, int n, double normal[3], double *offset, int *axis);
 /* Builds u, v, w from a view direction (eye towards look-at) and an up vector, as in
  * Shirley & Marschner: w = -view/|view|, u = up x w / |up x w|, v = w x u.
  * Returns -1 when the view is zero or up is parallel to it. */

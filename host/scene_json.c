@@ -609,25 +609,19 @@ static int get_points(const jreader *r, const cJSON *node, const char *path, int
     return 0;
 }
 
-/* Newell's normal (not normalised; its length is twice the area) and the size (bounding
- * box diagonal) of a polygon. */
-static void newell(const vec3f *p, int n, double nrm[3], double *size)
+/* The size (bounding box diagonal) of a polygon. */
+static double poly_size(const vec3f *p, int n)
 {
     double lo[3], hi[3];
     int i, k;
-    nrm[0] = nrm[1] = nrm[2] = 0;
     lo[0] = hi[0] = p[0].x;
     lo[1] = hi[1] = p[0].y;
     lo[2] = hi[2] = p[0].z;
     for (i = 0; i < n; i++) {
-        const vec3f *a = &p[i], *b = &p[(i + 1) % n];
         double q[3];
-        nrm[0] += ((double)a->y - b->y) * ((double)a->z + b->z);
-        nrm[1] += ((double)a->z - b->z) * ((double)a->x + b->x);
-        nrm[2] += ((double)a->x - b->x) * ((double)a->y + b->y);
-        q[0] = a->x;
-        q[1] = a->y;
-        q[2] = a->z;
+        q[0] = p[i].x;
+        q[1] = p[i].y;
+        q[2] = p[i].z;
         for (k = 0; k < 3; k++) {
             if (q[k] < lo[k])
                 lo[k] = q[k];
@@ -635,16 +629,16 @@ static void newell(const vec3f *p, int n, double nrm[3], double *size)
                 hi[k] = q[k];
         }
     }
-    *size = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                 (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                (hi[2] - lo[2]) * (hi[2] - lo[2]));
 }
 
 /* 0 when the polygon has an area; otherwise fails at `node`. */
 static int check_area(const jreader *r, const cJSON *node, const char *path, const vec3f *p, int n,
                       double unit[3], double *size_out)
 {
-    double nrm[3], size, len;
-    newell(p, n, nrm, &size);
+    double nrm[3], size = poly_size(p, n), len;
+    scene_newell(p, n, nrm);
     *size_out = size;
     len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
     if (!(len > 1e-12 * size * size) || !isfinite(len))
