@@ -179,6 +179,12 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
         c->t = (float)(pitch * s->height * 0.5);
         c->b = -c->t;
         c->d = 1.0f;
+    } else if (c->fov_deg > 0.0f) {
+        double t = c->d * tan(c->fov_deg * 0.5 * 3.14159265358979323846 / 180.0);
+        c->t = (float)t;
+        c->b = -c->t;
+        c->r = (float)(t * s->width / s->height);
+        c->l = -c->r;
     }
     if (!finite3(c->eye) || !finite3(c->u) || !finite3(c->v) || !finite3(c->w) || !isfinite(c->l) ||
         !isfinite(c->r) || !isfinite(c->b) || !isfinite(c->t) || !isfinite(c->d)) {

@@ -22,7 +22,10 @@ typedef struct {
     float l, r, b, t;    /* image-plane window, in u and v units */
     float d;             /* perspective: distance from eye to image plane */
     vec3f dir;           /* oblique: the common ray direction (world space, unit length) */
-    float nff_angle_deg; /* > 0: NFF angle; the window is derived in scene_finish() */
+    float nff_angle_deg; /* > 0: NFF angle, spanning the centres of the outer pixel rows */
+    float fov_deg;       /* > 0: vertical field of view at the image edges (perspective) */
+                         /* with either, the window is derived in scene_finish() from the
+                          * final image size, so a size override keeps square pixels */
 } scene_camera;
 
 typedef struct {

@@ -442,17 +442,13 @@ static int read_camera(const jreader *r, const cJSON *cam)
     if (fov && win)
         return jfail(r, win, "camera: give either \"window\" or \"fov\", not both");
     if (fov) {
-        double deg, t;
+        double deg;
         if (get_number(r, fov, "camera.fov", &deg) != 0)
             return -1;
         if (!(deg > 0 && deg < 180))
             return jfail(r, fov,
                          "camera.fov: must lie strictly between 0 and 180 degrees, found %g", deg);
-        t = d * tan(deg * 0.5 * 3.14159265358979323846 / 180.0);
-        c->t = (float)t;
-        c->b = -c->t;
-        c->r = (float)(t * r->s->width / r->s->height);
-        c->l = -c->r;
+        c->fov_deg = (float)deg; /* the window follows from the final image size */
     } else if (win) {
         double w[4];
         if (get_numbers(r, win, "camera.window", 4, "[l, r, b, t]", w) != 0)

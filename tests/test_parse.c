@@ -547,10 +547,20 @@ static void test_json_all(void **state)
     assert_vec(c->w, 0, 0, 1);
     assert_near(c->nff_angle_deg, 0);
     assert_near(c->d, 2);
+    assert_near(c->fov_deg, 90);
+    if (scene_finish(&s, 0, 0, 0, err, sizeof err) != 0)
+        fail_msg("%s", err);
     assert_near(c->t, 2); /* d tan(45 degrees) */
     assert_near(c->b, -2);
     assert_near(c->r, 4); /* t * 200/100 */
     assert_near(c->l, -4);
+    /* a size override keeps the vertical field of view and square pixels */
+    if (scene_finish(&s, 50, 100, 0, err, sizeof err) != 0)
+        fail_msg("%s", err);
+    assert_near(c->t, 2);
+    assert_near(c->r, 1); /* t * 50/100 */
+    s.width = 200;
+    s.height = 100;
 
     assert_int_equal(s.materials.count, 2);
     m = &SCENE_AT(s.materials, scene_material, 0);
