@@ -813,18 +813,25 @@ int image_write_png(const image *img, const char *path, char *err, size_t errlen
     return tmp_commit(&t, path, err, errlen);
 }
 
-int image_write(const image *img, const char *path, char *err, size_t errlen)
+int image_check_path(const char *path, char *err, size_t errlen)
 {
     if (!path || !*path) {
         set_err(err, errlen, "image: no output path given");
         return -1;
     }
-    if (has_ext(path, ".exr"))
-        return image_write_exr(img, path, err, errlen);
-    if (has_ext(path, ".png"))
-        return image_write_png(img, path, err, errlen);
+    if (has_ext(path, ".exr") || has_ext(path, ".png"))
+        return 0;
     set_err(err, errlen, "%s: unsupported image extension (accepted: .exr, .png)", path);
     return -1;
+}
+
+int image_write(const image *img, const char *path, char *err, size_t errlen)
+{
+    if (image_check_path(path, err, errlen) != 0)
+        return -1;
+    if (has_ext(path, ".exr"))
+        return image_write_exr(img, path, err, errlen);
+    return image_write_png(img, path, err, errlen);
 }
 
 /* Decoded PNG: RGB samples, 8- or 16-bit (16-bit in host byte order). Owned by the caller

@@ -16,6 +16,8 @@ void image_free(image *img);
  * file beside `path`, then renames it, so a failure never leaves a half-written image.
  * Returns 0, or -1 with a message in err. */
 int image_write(const image *img, const char *path, char *err, size_t errlen);
+/* Checks that image_write can write this kind of file (.exr or .png), before a render. */
+int image_check_path(const char *path, char *err, size_t errlen);
 int image_write_exr(const image *img, const char *path, char *err, size_t errlen);
 int image_write_png(const image *img, const char *path, char *err, size_t errlen);
 

@@ -153,6 +153,10 @@ int main(int argc, char **argv)
         }
         return 0;
     }
+    if (output && image_check_path(output, err, sizeof err) != 0) {
+        fprintf(stderr, "clwhitted: %s\nTry 'clwhitted --help'.\n", err);
+        return 2;
+    }
     if (optind != argc - 1) {
         fprintf(stderr, "clwhitted: %s\nTry 'clwhitted --help'.\n",
                 optind >= argc ? "no scene file given" : "more than one scene file given");

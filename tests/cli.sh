@@ -46,7 +46,8 @@ check_true "no image after bad input" test ! -e "$T/bad.png"
 printf '{\n  "camera": {\n    "eye": [0, 0, 1],\n    "look_at": [0, 0, 1],\n    "up": [0, 1, 0], "fov": 40\n  }\n}\n' >"$T/bad.json"
 "$BIN" -o "$T/badj.png" "$T/bad.json" >"$T/out" 2>"$T/err"; check "degenerate camera" 1 $?
 check_grep "json error names the file" "bad.json:" "$T/err"
-"$BIN" -o "$T/x.tiff" -W 8 -H 6 scenes/default.json >"$T/out" 2>"$T/err"; check "bad extension" 1 $?
+"$BIN" -o "$T/x.tiff" -W 8 -H 6 scenes/default.json >"$T/out" 2>"$T/err"; check "bad extension" 2 $?
+check_grep "bad extension message" "unsupported image extension" "$T/err"
 check_true "nothing left for a bad extension" test -z "$(ls "$T" | grep -v -e '^bad' -e '^out$' -e '^err$')"
 "$BIN" -o "$T/no/such/dir/x.png" -W 8 -H 6 scenes/default.json >"$T/out" 2>"$T/err"
 check "unwritable output" 1 $?
