@@ -640,11 +640,21 @@ static int need_scene(const renderer *r, char *err, size_t errlen)
     return 0;
 }
 
-static int run_raygen(renderer *r, size_t n, char *err, size_t errlen)
+/* One eye ray per pixel, launched over the image in 2-D (no index division in the
+ * kernel). */
+static int run_raygen(renderer *r, char *err, size_t errlen)
 {
-    return set_arg(r->k_raygen, 0, sizeof(cl_mem), &r->frame, "cw_raygen", r, err, errlen) ||
-           set_arg(r->k_raygen, 1, sizeof(cl_mem), &r->rays, "cw_raygen", r, err, errlen) ||
-           launch(r, r->k_raygen, n, "cw_raygen", err, errlen);
+    size_t global[2];
+    cl_int e;
+    global[0] = ((size_t)r->host_frame.nx + 7) / 8 * 8;
+    global[1] = ((size_t)r->host_frame.ny + 7) / 8 * 8;
+    if (set_arg(r->k_raygen, 0, sizeof(cl_mem), &r->frame, "cw_raygen", r, err, errlen) ||
+        set_arg(r->k_raygen, 1, sizeof(cl_mem), &r->rays, "cw_raygen", r, err, errlen))
+        return -1;
+    e = clEnqueueNDRangeKernel(r->queue, r->k_raygen, 2, NULL, global, NULL, 0, NULL, NULL);
+    if (e != CL_SUCCESS)
+        return cl_fail(e, "clEnqueueNDRangeKernel(cw_raygen)", r, err, errlen);
+    return 0;
 }
 
 static int run_intersect(renderer *r, cl_int n, char *err, size_t errlen)
@@ -703,7 +713,7 @@ int renderer_render(renderer *r, image *img, char *err, size_t errlen)
     if (need_scene(r, err, errlen))
         return -1;
     n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    if (ensure_work(r, n, err, errlen) || run_raygen(r, n, err, errlen) ||
+    if (ensure_work(r, n, err, errlen) || run_raygen(r, err, errlen) ||
         fill_zero(r, r->image, n * sizeof(cl_float4), "image", err, errlen))
         return -1;
     for (depth = 1; depth <= r->host_frame.max_depth; depth++) {
@@ -744,7 +754,7 @@ int renderer_generate_rays(renderer *r, cw_ray *rays, char *err, size_t errlen)
     if (need_scene(r, err, errlen))
         return -1;
     n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    if (ensure_work(r, n, err, errlen) || run_raygen(r, n, err, errlen) ||
+    if (ensure_work(r, n, err, errlen) || run_raygen(r, err, errlen) ||
         read_buffer(r, r->rays, n * sizeof *rays, rays, "rays", err, errlen))
         return -1;
     return 0;

@@ -38,12 +38,4 @@ CW_INLINE cw_ray cam_ray(CW_GLOBAL const cw_frame *f, int i, int j)
     return ray;
 }
 
-/* The eye ray for image index `pixel` (row 0 at the top). */
-CW_INLINE cw_ray cam_ray_for_pixel(CW_GLOBAL const cw_frame *f, int pixel)
-{
-    int i = pixel % f->nx;
-    int row = pixel / f->nx;
-    return cam_ray(f, i, f->ny - 1 - row);
-}
-
 #endif

@@ -27,12 +27,14 @@ static cw_world make_world(__global const cw_frame *f, __global const cw_sphere 
     return w;
 }
 
+/* 2-D launch: x = column, y = image row (0 at the top). */
 __kernel void cw_raygen(__global const cw_frame *f, __global cw_ray *rays)
 {
-    int gid = (int)get_global_id(0);
-    if (gid >= f->nx * f->ny)
+    int x = (int)get_global_id(0);
+    int row = (int)get_global_id(1);
+    if (x >= f->nx || row >= f->ny)
         return;
-    rays[gid] = cam_ray_for_pixel(f, gid);
+    rays[row * f->nx + x] = cam_ray(f, x, f->ny - 1 - row);
 }
 
 __kernel void cw_intersect(__global const cw_frame *f, CW_WORLD_ARGS, __global const cw_ray *rays,
