@@ -496,27 +496,6 @@ static int parse_entity(nff_reader *r, long *v_line)
     }
 }
 
-/* Sets s->name to the base name of path without its extension. */
-static int set_name(scene *s, const char *path)
-{
-    const char *base = strrchr(path, '/'), *dot;
-    size_t n;
-    base = base ? base + 1 : path;
-    dot = strrchr(base, '.');
-    n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-    if (n == 0) {
-        base = "scene";
-        n = 5;
-    }
-    free(s->name);
-    s->name = malloc(n + 1);
-    if (!s->name)
-        return -1;
-    memcpy(s->name, base, n);
-    s->name[n] = '\0';
-    return 0;
-}
-
 /* Parses buf[0..len), which must be writable and have buf[len] == '\0'. */
 static int parse_buffer(char *buf, size_t len, const char *name, scene *s, char *err, size_t errlen)
 {
@@ -532,7 +511,7 @@ static int parse_buffer(char *buf, size_t len, const char *name, scene *s, char 
     r.s = s;
     r.material = -1;
 
-    if (set_name(s, name) != 0)
+    if (scene_set_name(s, name) != 0)
         return fail(&r, 1, "out of memory");
     {
         const char *nul = memchr(buf, '\0', len);

@@ -54,6 +54,27 @@ long scene_push(scene_array *a, const void *elem, size_t elem_size)
     return (long)a->count++;
 }
 
+/* Sets s->name to the base name of path without its extension. */
+int scene_set_name(scene *s, const char *path)
+{
+    const char *base = strrchr(path, '/'), *dot;
+    size_t n;
+    base = base ? base + 1 : path;
+    dot = strrchr(base, '.');
+    n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    if (n == 0) {
+        base = "scene";
+        n = 5;
+    }
+    free(s->name);
+    s->name = malloc(n + 1);
+    if (!s->name)
+        return -1;
+    memcpy(s->name, base, n);
+    s->name[n] = '\0';
+    return 0;
+}
+
 vec3f vec3f_make(float x, float y, float z)
 {
     vec3f v;

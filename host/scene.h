@@ -95,6 +95,10 @@ typedef struct {
 void scene_init(scene *s);
 void scene_free(scene *s);
 
+/* Sets s->name to the base name of path without its extension ("scene" if empty).
+ * Returns 0, or -1 when out of memory. */
+int scene_set_name(scene *s, const char *path);
+
 /* Appends one element of elem_size bytes; returns its index or -1 when out of memory. */
 long scene_push(scene_array *a, const void *elem, size_t elem_size);
 

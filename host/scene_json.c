@@ -835,27 +835,6 @@ static int read_scene(jreader *r, const cJSON *root)
 
 /* ---- entry points -------------------------------------------------------------------------- */
 
-/* Sets s->name to the base name of path without its extension. */
-static int set_name(scene *s, const char *path)
-{
-    const char *base = strrchr(path, '/'), *dot;
-    size_t n;
-    base = base ? base + 1 : path;
-    dot = strrchr(base, '.');
-    n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-    if (n == 0) {
-        base = "scene";
-        n = 5;
-    }
-    free(s->name);
-    s->name = malloc(n + 1);
-    if (!s->name)
-        return -1;
-    memcpy(s->name, base, n);
-    s->name[n] = '\0';
-    return 0;
-}
-
 /* Parses buf[0..len), which has buf[len] == '\0'. */
 static int parse_buffer(const char *buf, size_t len, const char *name, scene *s, char *err,
                         size_t errlen)
@@ -871,7 +850,7 @@ static int parse_buffer(const char *buf, size_t len, const char *name, scene *s,
     r.err = err;
     r.errlen = errlen;
     r.s = s;
-    if (set_name(s, name) != 0)
+    if (scene_set_name(s, name) != 0)
         return fail_line(&r, 1, "out of memory");
     if ((nul = memchr(buf, '\0', len)))
         return fail_line(&r, count_lines(buf, nul), "unexpected NUL byte (not a text file?)");
