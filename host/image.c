@@ -255,6 +255,19 @@ static void exr_fail(char *err, size_t errlen, const char *path, const char *wha
                 detail);
 }
 
+/* Checks the result of an OpenEXRCore call: on failure names the step in *what and
+ * returns 1; on success clears the stored library message, so that a later failure's
+ * message is its own. */
+static int exr_failed(exr_state *st, exr_result_t rv, const char *desc, const char **what)
+{
+    if (rv != EXR_ERR_SUCCESS) {
+        *what = desc;
+        return 1;
+    }
+    st->msg[0] = '\0';
+    return 0;
+}
+
 int image_write_exr(const image *img, const char *path, char *err, size_t errlen)
 {
     static const char *const names[3] = {"R", "G", "B"};
@@ -288,30 +301,33 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
     init.write_fn = exr_stream_write;
     init.destroy_fn = exr_stream_destroy;
 
-#define EXR_TRY(call, desc)                                                                        \
-    do {                                                                                           \
-        st.msg[0] = '\0';                                                                          \
-        rv = (call);                                                                               \
-        if (rv != EXR_ERR_SUCCESS) {                                                               \
-            what = (desc);                                                                         \
-            goto fail;                                                                             \
-        }                                                                                          \
-    } while (0)
-
-    EXR_TRY(exr_start_write(&ctx, t.tmp, EXR_WRITE_FILE_DIRECTLY, &init), "exr_start_write");
-    EXR_TRY(exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part), "exr_add_part");
+    if (exr_failed(&st, (rv = exr_start_write(&ctx, t.tmp, EXR_WRITE_FILE_DIRECTLY, &init)),
+                   "exr_start_write", &what))
+        goto fail;
+    if (exr_failed(&st, (rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part)), "exr_add_part",
+                   &what))
+        goto fail;
     /* Sets data and display windows to (0,0)-(w-1,h-1), pixel aspect 1, screen window,
      * increasing line order and the compression. */
-    EXR_TRY(exr_initialize_required_attr_simple(ctx, part, img->width, img->height,
-                                                EXR_COMPRESSION_ZIP),
-            "exr_initialize_required_attr_simple");
+    if (exr_failed(&st,
+                   (rv = exr_initialize_required_attr_simple(ctx, part, img->width, img->height,
+                                                             EXR_COMPRESSION_ZIP)),
+                   "exr_initialize_required_attr_simple", &what))
+        goto fail;
     for (int c = 0; c < 3; c++)
-        EXR_TRY(exr_add_channel(ctx, part, names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC,
-                                1, 1),
-                "exr_add_channel");
-    EXR_TRY(exr_write_header(ctx), "exr_write_header");
-    EXR_TRY(exr_get_scanlines_per_chunk(ctx, part, &lines), "exr_get_scanlines_per_chunk");
-    EXR_TRY(exr_get_chunk_count(ctx, part, &chunks), "exr_get_chunk_count");
+        if (exr_failed(&st,
+                       (rv = exr_add_channel(ctx, part, names[c], EXR_PIXEL_FLOAT,
+                                             EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1)),
+                       "exr_add_channel", &what))
+            goto fail;
+    if (exr_failed(&st, (rv = exr_write_header(ctx)), "exr_write_header", &what))
+        goto fail;
+    if (exr_failed(&st, (rv = exr_get_scanlines_per_chunk(ctx, part, &lines)),
+                   "exr_get_scanlines_per_chunk", &what))
+        goto fail;
+    if (exr_failed(&st, (rv = exr_get_chunk_count(ctx, part, &chunks)), "exr_get_chunk_count",
+                   &what))
+        goto fail;
     if (lines <= 0 || chunks <= 0 || (int64_t)lines * chunks < img->height) {
         set_err(err, errlen, "%s: unexpected EXR chunk layout (%d chunks of %d lines)", path,
                 (int)chunks, (int)lines);
@@ -322,13 +338,18 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
         exr_chunk_info_t cinfo;
         int y = ci * lines;
         const unsigned char *row = (const unsigned char *)img->rgb + (size_t)y * line_bytes;
-        EXR_TRY(exr_write_scanline_chunk_info(ctx, part, y, &cinfo),
-                "exr_write_scanline_chunk_info");
+        if (exr_failed(&st, (rv = exr_write_scanline_chunk_info(ctx, part, y, &cinfo)),
+                       "exr_write_scanline_chunk_info", &what))
+            goto fail;
         if (!enc_init) {
-            EXR_TRY(exr_encoding_initialize(ctx, part, &cinfo, &enc), "exr_encoding_initialize");
+            if (exr_failed(&st, (rv = exr_encoding_initialize(ctx, part, &cinfo, &enc)),
+                           "exr_encoding_initialize", &what))
+                goto fail;
             enc_init = 1;
         } else {
-            EXR_TRY(exr_encoding_update(ctx, part, &cinfo, &enc), "exr_encoding_update");
+            if (exr_failed(&st, (rv = exr_encoding_update(ctx, part, &cinfo, &enc)),
+                           "exr_encoding_update", &what))
+                goto fail;
         }
         /* The pipeline's channels are in file order (alphabetical: B, G, R); match by name
          * rather than by position. */
@@ -350,12 +371,15 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
             ch->encode_from_ptr = row + (size_t)comp * sizeof(float);
         }
         if (ci == 0)
-            EXR_TRY(exr_encoding_choose_default_routines(ctx, part, &enc),
-                    "exr_encoding_choose_default_routines");
-        EXR_TRY(exr_encoding_run(ctx, part, &enc), "exr_encoding_run");
+            if (exr_failed(&st, (rv = exr_encoding_choose_default_routines(ctx, part, &enc)),
+                           "exr_encoding_choose_default_routines", &what))
+                goto fail;
+        if (exr_failed(&st, (rv = exr_encoding_run(ctx, part, &enc)), "exr_encoding_run", &what))
+            goto fail;
     }
     enc_init = 0;
-    EXR_TRY(exr_encoding_destroy(ctx, &enc), "exr_encoding_destroy");
+    if (exr_failed(&st, (rv = exr_encoding_destroy(ctx, &enc)), "exr_encoding_destroy", &what))
+        goto fail;
     /* exr_finish writes the chunk offset table; it must succeed for a valid file. */
     st.msg[0] = '\0';
     rv = exr_finish(&ctx);
@@ -365,7 +389,6 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
             rv = EXR_ERR_WRITE_IO;
         goto fail;
     }
-#undef EXR_TRY
     return tmp_commit(&t, path, err, errlen);
 
 fail:
@@ -507,30 +530,29 @@ int image_read_exr(const char *path, image *img, char *err, size_t errlen)
     init.error_handler_fn = exr_error_cb;
     init.user_data = &st;
 
-#define EXR_TRY(call, desc)                                                                        \
-    do {                                                                                           \
-        st.msg[0] = '\0';                                                                          \
-        rv = (call);                                                                               \
-        if (rv != EXR_ERR_SUCCESS) {                                                               \
-            what = (desc);                                                                         \
-            goto fail;                                                                             \
-        }                                                                                          \
-    } while (0)
-
-    EXR_TRY(exr_start_read(&r.ctx, path, &init), "opening the EXR file (exr_start_read)");
-    EXR_TRY(exr_get_count(r.ctx, &nparts), "exr_get_count");
+    if (exr_failed(r.st, (rv = exr_start_read(&r.ctx, path, &init)),
+                   "opening the EXR file (exr_start_read)", &what))
+        goto fail;
+    if (exr_failed(r.st, (rv = exr_get_count(r.ctx, &nparts)), "exr_get_count", &what))
+        goto fail;
     if (nparts < 1) {
         set_err(err, errlen, "%s: EXR file has no parts", path);
         goto fail_quiet;
     }
-    EXR_TRY(exr_get_storage(r.ctx, r.part, &storage), "exr_get_storage");
+    if (exr_failed(r.st, (rv = exr_get_storage(r.ctx, r.part, &storage)), "exr_get_storage", &what))
+        goto fail;
     if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED) {
         set_err(err, errlen, "%s: deep EXR images are not supported", path);
         goto fail_quiet;
     }
-    EXR_TRY(exr_get_data_window(r.ctx, r.part, &r.dw), "exr_get_data_window");
-    EXR_TRY(exr_get_display_window(r.ctx, r.part, &r.disp), "exr_get_display_window");
-    EXR_TRY(exr_get_channels(r.ctx, r.part, &chl), "exr_get_channels");
+    if (exr_failed(r.st, (rv = exr_get_data_window(r.ctx, r.part, &r.dw)), "exr_get_data_window",
+                   &what))
+        goto fail;
+    if (exr_failed(r.st, (rv = exr_get_display_window(r.ctx, r.part, &r.disp)),
+                   "exr_get_display_window", &what))
+        goto fail;
+    if (exr_failed(r.st, (rv = exr_get_channels(r.ctx, r.part, &chl)), "exr_get_channels", &what))
+        goto fail;
 
     dw_w = (int64_t)r.dw.max.x - r.dw.min.x + 1;
     dw_h = (int64_t)r.dw.max.y - r.dw.min.y + 1;
@@ -600,8 +622,12 @@ int image_read_exr(const char *path, image *img, char *err, size_t errlen)
 
     if (storage == EXR_STORAGE_SCANLINE) {
         int32_t lines = 0, chunks = 0;
-        EXR_TRY(exr_get_scanlines_per_chunk(r.ctx, r.part, &lines), "exr_get_scanlines_per_chunk");
-        EXR_TRY(exr_get_chunk_count(r.ctx, r.part, &chunks), "exr_get_chunk_count");
+        if (exr_failed(r.st, (rv = exr_get_scanlines_per_chunk(r.ctx, r.part, &lines)),
+                       "exr_get_scanlines_per_chunk", &what))
+            goto fail;
+        if (exr_failed(r.st, (rv = exr_get_chunk_count(r.ctx, r.part, &chunks)),
+                       "exr_get_chunk_count", &what))
+            goto fail;
         if (lines <= 0 || chunks <= 0 || (uint64_t)dw_w * (uint64_t)lines > SIZE_MAX / 12) {
             set_err(err, errlen, "%s: invalid EXR chunk layout", path);
             goto fail_quiet;
@@ -615,8 +641,9 @@ int image_read_exr(const char *path, image *img, char *err, size_t errlen)
         for (int32_t ci = 0; ci < chunks; ci++) {
             exr_chunk_info_t cinfo;
             int y = r.dw.min.y + ci * lines;
-            EXR_TRY(exr_read_scanline_chunk_info(r.ctx, r.part, y, &cinfo),
-                    "exr_read_scanline_chunk_info");
+            if (exr_failed(r.st, (rv = exr_read_scanline_chunk_info(r.ctx, r.part, y, &cinfo)),
+                           "exr_read_scanline_chunk_info", &what))
+                goto fail;
             rv = exr_read_chunk_into(&r, &cinfo, r.dw.min.x, cinfo.start_y, &what);
             if (rv != EXR_ERR_SUCCESS)
                 goto fail;
@@ -626,8 +653,9 @@ int image_read_exr(const char *path, image *img, char *err, size_t errlen)
         exr_tile_level_mode_t lm;
         exr_tile_round_mode_t rm;
         int64_t ntx, nty;
-        EXR_TRY(exr_get_tile_descriptor(r.ctx, r.part, &tw, &th, &lm, &rm),
-                "exr_get_tile_descriptor");
+        if (exr_failed(r.st, (rv = exr_get_tile_descriptor(r.ctx, r.part, &tw, &th, &lm, &rm)),
+                       "exr_get_tile_descriptor", &what))
+            goto fail;
         if (tw == 0 || th == 0 || (uint64_t)tw * th > SIZE_MAX / 12) {
             set_err(err, errlen, "%s: invalid EXR tile size", path);
             goto fail_quiet;
@@ -644,8 +672,11 @@ int image_read_exr(const char *path, image *img, char *err, size_t errlen)
         for (int64_t ty = 0; ty < nty; ty++) {
             for (int64_t tx = 0; tx < ntx; tx++) {
                 exr_chunk_info_t cinfo;
-                EXR_TRY(exr_read_tile_chunk_info(r.ctx, r.part, (int)tx, (int)ty, 0, 0, &cinfo),
-                        "exr_read_tile_chunk_info");
+                if (exr_failed(r.st,
+                               (rv = exr_read_tile_chunk_info(r.ctx, r.part, (int)tx, (int)ty, 0, 0,
+                                                              &cinfo)),
+                               "exr_read_tile_chunk_info", &what))
+                    goto fail;
                 rv = exr_read_chunk_into(&r, &cinfo, (int)(r.dw.min.x + tx * (int64_t)tw),
                                          (int)(r.dw.min.y + ty * (int64_t)th), &what);
                 if (rv != EXR_ERR_SUCCESS)
@@ -653,7 +684,6 @@ int image_read_exr(const char *path, image *img, char *err, size_t errlen)
             }
         }
     }
-#undef EXR_TRY
 
     if (r.dec_init)
         exr_decoding_destroy(r.ctx, &r.dec);
