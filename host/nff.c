@@ -545,27 +545,10 @@ static int parse_buffer(char *buf, size_t len, const char *name, scene *s, char 
 
 int nff_parse(const char *text, size_t len, const char *name, scene *s, char *err, size_t errlen)
 {
-    char *buf = malloc(len + 1);
-    int rc;
-    if (!buf) {
-        snprintf(err, errlen, "%s:1: out of memory", name);
-        return -1;
-    }
-    memcpy(buf, text, len);
-    buf[len] = '\0';
-    rc = parse_buffer(buf, len, name, s, err, errlen);
-    free(buf);
-    return rc;
+    return scene_parse_copy(parse_buffer, text, len, name, s, err, errlen);
 }
 
 int nff_load(const char *path, scene *s, char *err, size_t errlen)
 {
-    char *buf;
-    size_t len;
-    int rc;
-    if (scene_read_file(path, &buf, &len, err, errlen) != 0)
-        return -1;
-    rc = parse_buffer(buf, len, path, s, err, errlen);
-    free(buf);
-    return rc;
+    return scene_parse_file(parse_buffer, path, s, err, errlen);
 }

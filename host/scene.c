@@ -295,6 +295,34 @@ int scene_read_file(const char *path, char **out, size_t *outlen, char *err, siz
     return 0;
 }
 
+int scene_parse_copy(scene_text_parser parse, const char *text, size_t len, const char *name,
+                     scene *s, char *err, size_t errlen)
+{
+    char *buf = malloc(len + 1);
+    int rc;
+    if (!buf) {
+        snprintf(err, errlen, "%s:1: out of memory", name);
+        return -1;
+    }
+    memcpy(buf, text, len);
+    buf[len] = '\0';
+    rc = parse(buf, len, name, s, err, errlen);
+    free(buf);
+    return rc;
+}
+
+int scene_parse_file(scene_text_parser parse, const char *path, scene *s, char *err, size_t errlen)
+{
+    char *buf;
+    size_t len;
+    int rc;
+    if (scene_read_file(path, &buf, &len, err, errlen) != 0)
+        return -1;
+    rc = parse(buf, len, path, s, err, errlen);
+    free(buf);
+    return rc;
+}
+
 static int ends_with(const char *s, const char *suffix)
 {
     size_t n = strlen(s), m = strlen(suffix);

@@ -115,6 +115,14 @@ int scene_load(const char *path, scene *s, char *err, size_t errlen);
  * files are errors naming the path and the reason). Returns 0, or -1 with err. */
 int scene_read_file(const char *path, char **out, size_t *outlen, char *err, size_t errlen);
 
+/* A reader's parser: text in buf[0..len), writable, with buf[len] == '\0'. */
+typedef int (*scene_text_parser)(char *buf, size_t len, const char *name, scene *s, char *err,
+                                 size_t errlen);
+/* Runs a parser on a NUL-terminated copy of text, or on the contents of a file. */
+int scene_parse_copy(scene_text_parser parse, const char *text, size_t len, const char *name,
+                     scene *s, char *err, size_t errlen);
+int scene_parse_file(scene_text_parser parse, const char *path, scene *s, char *err, size_t errlen);
+
 /* The readers. *_load reads a file; *_parse reads text in memory, naming it `name` in
  * errors. Both return 0, or -1 with "name:line: message" in err. */
 int nff_load(const char *path, scene *s, char *err, size_t errlen);
