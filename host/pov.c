@@ -49,11 +49,6 @@
 /* transmit of the upper layers of a layered material (see write_layered) */
 #define POV_LAYER_T 0.5
 
-static int finite3(vec3f a)
-{
-    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
-}
-
 static int is_zero3(vec3f a)
 {
     return a.x == 0.0f && a.y == 0.0f && a.z == 0.0f;
@@ -174,17 +169,6 @@ static void write_layered(FILE *f, const scene_material *m)
     fprintf(f, " }\n  }\n");
 }
 
-static int check_material_index(int m, size_t count, const char *what, size_t i, char *err,
-                                size_t errlen)
-{
-    if (m < 0 || (size_t)m >= count) {
-        snprintf(err, errlen, "%s %zu uses material %d, but the scene has %zu material%s", what, i,
-                 m, count, count == 1 ? "" : "s");
-        return -1;
-    }
-    return 0;
-}
-
 /* v moved along the dominant axis onto the plane nn.x = off */
 static void onto_plane(vec3f v, const double nn[3], double off, int axis, double out[3])
 {
@@ -214,86 +198,16 @@ static int triangle_has_area(const scene_triangle *t)
     return c[0] != 0.0 || c[1] != 0.0 || c[2] != 0.0;
 }
 
+/* The exporter needs a finished, consistent scene: scene_check plus the size. */
 static int check_scene(const scene *s, char *err, size_t errlen)
 {
-    const scene_camera *c = &s->camera;
-    size_t i, nm = s->materials.count;
     if (s->width <= 0 || s->height <= 0 || s->max_depth < 1) {
         snprintf(err, errlen,
                  "scene is not finished (size %dx%d, depth %d): call scene_finish first", s->width,
                  s->height, s->max_depth);
         return -1;
     }
-    if (c->projection != SCENE_PERSPECTIVE && c->projection != SCENE_ORTHOGRAPHIC &&
-        c->projection != SCENE_OBLIQUE) {
-        snprintf(err, errlen, "unknown camera projection %d", (int)c->projection);
-        return -1;
-    }
-    if (!finite3(c->eye) || !finite3(c->u) || !finite3(c->v) || !finite3(c->w) ||
-        !finite3(c->dir) || !isfinite(c->l) || !isfinite(c->r) || !isfinite(c->b) ||
-        !isfinite(c->t) || !isfinite(c->d) || !finite3(s->background) || !finite3(s->ambient)) {
-        snprintf(err, errlen, "camera, background or ambient has non-finite values");
-        return -1;
-    }
-    for (i = 0; i < nm; i++) {
-        const scene_material *m = &SCENE_AT(s->materials, scene_material, i);
-        if (!finite3(m->ka) || !finite3(m->kd) || !finite3(m->ks) || !finite3(m->km) ||
-            !isfinite(m->p)) {
-            snprintf(err, errlen, "material %zu has non-finite values", i);
-            return -1;
-        }
-    }
-    for (i = 0; i < s->lights.count; i++) {
-        const scene_light *l = &SCENE_AT(s->lights, scene_light, i);
-        if (!finite3(l->position) || !finite3(l->intensity)) {
-            snprintf(err, errlen, "light %zu has non-finite values", i);
-            return -1;
-        }
-    }
-    for (i = 0; i < s->spheres.count; i++) {
-        const scene_sphere *sp = &SCENE_AT(s->spheres, scene_sphere, i);
-        if (!finite3(sp->center) || !isfinite(sp->radius)) {
-            snprintf(err, errlen, "sphere %zu has non-finite values", i);
-            return -1;
-        }
-        if (check_material_index(sp->material, nm, "sphere", i, err, errlen) != 0)
-            return -1;
-    }
-    for (i = 0; i < s->triangles.count; i++) {
-        const scene_triangle *t = &SCENE_AT(s->triangles, scene_triangle, i);
-        int k;
-        for (k = 0; k < 3; k++)
-            if (!finite3(t->p[k]) || (t->has_normals && !finite3(t->n[k]))) {
-                snprintf(err, errlen, "triangle %zu has non-finite values", i);
-                return -1;
-            }
-        if (t->has_normals)
-            for (k = 0; k < 3; k++)
-                if (is_zero3(t->n[k])) {
-                    snprintf(err, errlen, "triangle %zu has a zero vertex normal", i);
-                    return -1;
-                }
-        if (check_material_index(t->material, nm, "triangle", i, err, errlen) != 0)
-            return -1;
-    }
-    for (i = 0; i < s->polygons.count; i++) {
-        const scene_polygon *p = &SCENE_AT(s->polygons, scene_polygon, i);
-        int k;
-        if (p->count < 3 || p->first < 0 ||
-            (size_t)p->first + (size_t)p->count > s->poly_verts.count) {
-            snprintf(err, errlen, "polygon %zu has invalid vertices (first %d, count %d)", i,
-                     p->first, p->count);
-            return -1;
-        }
-        for (k = 0; k < p->count; k++)
-            if (!finite3(SCENE_AT(s->poly_verts, vec3f, p->first + k))) {
-                snprintf(err, errlen, "polygon %zu has non-finite values", i);
-                return -1;
-            }
-        if (check_material_index(p->material, nm, "polygon", i, err, errlen) != 0)
-            return -1;
-    }
-    return 0;
+    return scene_check(s, err, errlen);
 }
 
 static void write_camera(FILE *f, const scene_camera *c)

@@ -169,6 +169,94 @@ static int finite3(vec3f a)
     return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
 }
 
+static int check_material_index(const char *name, int m, size_t count, const char *what, size_t i,
+                                char *err, size_t errlen)
+{
+    if (m < 0 || (size_t)m >= count) {
+        snprintf(err, errlen, "%s: %s %zu uses material %d, but the scene has %zu material%s", name,
+                 what, i, m, count, count == 1 ? "" : "s");
+        return -1;
+    }
+    return 0;
+}
+
+int scene_check(const scene *s, char *err, size_t errlen)
+{
+    const scene_camera *c = &s->camera;
+    const char *name = s->name ? s->name : "scene";
+    size_t i, nm = s->materials.count;
+    if (c->projection != SCENE_PERSPECTIVE && c->projection != SCENE_ORTHOGRAPHIC &&
+        c->projection != SCENE_OBLIQUE) {
+        snprintf(err, errlen, "%s: unknown camera projection %d", name, (int)c->projection);
+        return -1;
+    }
+    if (!finite3(c->eye) || !finite3(c->u) || !finite3(c->v) || !finite3(c->w) ||
+        !finite3(c->dir) || !isfinite(c->l) || !isfinite(c->r) || !isfinite(c->b) ||
+        !isfinite(c->t) || !isfinite(c->d) || !finite3(s->background) || !finite3(s->ambient)) {
+        snprintf(err, errlen, "%s: camera, background or ambient has non-finite values", name);
+        return -1;
+    }
+    for (i = 0; i < nm; i++) {
+        const scene_material *m = &SCENE_AT(s->materials, scene_material, i);
+        if (!finite3(m->ka) || !finite3(m->kd) || !finite3(m->ks) || !finite3(m->km) ||
+            !isfinite(m->p)) {
+            snprintf(err, errlen, "%s: material %zu has non-finite values", name, i);
+            return -1;
+        }
+    }
+    for (i = 0; i < s->lights.count; i++) {
+        const scene_light *l = &SCENE_AT(s->lights, scene_light, i);
+        if (!finite3(l->position) || !finite3(l->intensity)) {
+            snprintf(err, errlen, "%s: light %zu has non-finite values", name, i);
+            return -1;
+        }
+    }
+    for (i = 0; i < s->spheres.count; i++) {
+        const scene_sphere *sp = &SCENE_AT(s->spheres, scene_sphere, i);
+        if (!finite3(sp->center) || !isfinite(sp->radius)) {
+            snprintf(err, errlen, "%s: sphere %zu has non-finite values", name, i);
+            return -1;
+        }
+        if (check_material_index(name, sp->material, nm, "sphere", i, err, errlen) != 0)
+            return -1;
+    }
+    for (i = 0; i < s->triangles.count; i++) {
+        const scene_triangle *t = &SCENE_AT(s->triangles, scene_triangle, i);
+        int k;
+        for (k = 0; k < 3; k++)
+            if (!finite3(t->p[k]) || (t->has_normals && !finite3(t->n[k]))) {
+                snprintf(err, errlen, "%s: triangle %zu has non-finite values", name, i);
+                return -1;
+            }
+        if (t->has_normals)
+            for (k = 0; k < 3; k++)
+                if (!(vec3f_length(t->n[k]) > 0.0f)) {
+                    snprintf(err, errlen, "%s: triangle %zu has a zero vertex normal", name, i);
+                    return -1;
+                }
+        if (check_material_index(name, t->material, nm, "triangle", i, err, errlen) != 0)
+            return -1;
+    }
+    for (i = 0; i < s->polygons.count; i++) {
+        const scene_polygon *p = &SCENE_AT(s->polygons, scene_polygon, i);
+        int k;
+        if (p->count < 3 || p->first < 0 ||
+            (size_t)p->first + (size_t)p->count > s->poly_verts.count) {
+            snprintf(err, errlen, "%s: polygon %zu has invalid vertices (first %d, count %d)", name,
+                     i, p->first, p->count);
+            return -1;
+        }
+        for (k = 0; k < p->count; k++)
+            if (!finite3(SCENE_AT(s->poly_verts, vec3f, p->first + k))) {
+                snprintf(err, errlen, "%s: polygon %zu has non-finite values", name, i);
+                return -1;
+            }
+        if (check_material_index(name, p->material, nm, "polygon", i, err, errlen) != 0)
+            return -1;
+    }
+    return 0;
+}
+
 int scene_finish(scene *s, int width, int height, int max_depth, char *err, size_t errlen)
 {
     scene_camera *c = &s->camera;
@@ -207,11 +295,8 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
         c->r = (float)(t * s->width / s->height);
         c->l = -c->r;
     }
-    if (!finite3(c->eye) || !finite3(c->u) || !finite3(c->v) || !finite3(c->w) || !isfinite(c->l) ||
-        !isfinite(c->r) || !isfinite(c->b) || !isfinite(c->t) || !isfinite(c->d)) {
-        snprintf(err, errlen, "%s: camera has non-finite values", name);
+    if (scene_check(s, err, errlen) != 0)
         return -1;
-    }
     if (!(c->r > c->l) || !(c->t > c->b)) {
         snprintf(err, errlen, "%s: camera window must have l < r and b < t", name);
         return -1;

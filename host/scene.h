@@ -107,6 +107,11 @@ long scene_push(scene_array *a, const void *elem, size_t elem_size);
  * Returns 0, or -1 with a message in err. */
 int scene_finish(scene *s, int width, int height, int max_depth, char *err, size_t errlen);
 
+/* Checks a scene's consistency: a known projection, finite values everywhere, material
+ * indices in range, polygon vertex ranges inside poly_verts, non-zero vertex normals.
+ * scene_finish calls it. Returns 0, or -1 with "name: what is wrong" in err. */
+int scene_check(const scene *s, char *err, size_t errlen);
+
 /* Loads a scene, choosing the reader by extension (.nff, .json). Returns 0, or -1 with
  * "file:line: message" in err. */
 int scene_load(const char *path, scene *s, char *err, size_t errlen);
