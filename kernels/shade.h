@@ -52,7 +52,7 @@ CW_INLINE vec3 shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
     vec3 weight = v3_from4(ray->weight);
     vec3 o = v3_from4(ray->origin);
     vec3 d = v3_from4(ray->dir);
-    vec3 p, ng, n, color, ka, kd, ks, km;
+    vec3 p, ng, n, color, ka, kd, ks;
     float phong, eps;
     int k;
     CW_GLOBAL const cw_material *m;
@@ -78,7 +78,6 @@ CW_INLINE vec3 shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
     ka = v3_from4(m->ka);
     kd = v3_from4(m->kd);
     ks = v3_from4(m->ks);
-    km = v3_from4(m->km);
     phong = m->ka.w;
     eps = shade_offset(p);
 
@@ -106,6 +105,7 @@ CW_INLINE vec3 shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
     color = v3_mul(weight, color);
 
 #if CW_HAS_MIRRORS
+    vec3 km = v3_from4(m->km);
     if (ray->depth < f->max_depth && (km.x > 0.0f || km.y > 0.0f || km.z > 0.0f)) {
         vec3 r = v3_sub(d, v3_scale(n, 2.0f * v3_dot(d, n)));
         ray->origin = v4_from3(v3_add(p, v3_scale(ng, eps)), 0.0f);
@@ -115,7 +115,6 @@ CW_INLINE vec3 shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
         return color;
     }
 #endif
-    (void)km;
     ray->pixel = -1;
     return color;
 }

@@ -531,7 +531,6 @@ static void test_shade_light_behind(void **state)
  * or the background waits. Ambient light only, so every local term is ka Ia exactly. */
 static void mirror_scene(scene *s, int with_c)
 {
-    float h = 0.70710678f;
     vec3f a[4], b[4], c[4];
     int ma, mb, mc;
     base_scene(s, SCENE_ORTHOGRAPHIC, 1, 1);
@@ -545,7 +544,6 @@ static void mirror_scene(scene *s, int with_c)
                       vec3f_make(0.9f, 0.4f, 0.8f), 1);
     mc = add_material(s, vec3f_make(0.6f, 0.5f, 0.4f), vec3f_make(0, 0, 0), vec3f_make(0, 0, 0),
                       vec3f_make(0, 0, 0), 1);
-    (void)h;
     a[0] = vec3f_make(-1, -1, 1);
     a[1] = vec3f_make(1, -1, -1);
     a[2] = vec3f_make(1, 1, -1);
