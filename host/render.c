@@ -23,6 +23,7 @@ _Static_assert(sizeof(cw_light) == 32, "cw_light layout");
 _Static_assert(sizeof(cw_frame) == 176, "cw_frame layout");
 _Static_assert(sizeof(cw_ray) == 64, "cw_ray layout");
 _Static_assert(sizeof(cw_hit) == 32, "cw_hit layout");
+_Static_assert(sizeof(cw_bvh_node) == 32, "cw_bvh_node layout");
 
 struct renderer {
     cl_device_id device;

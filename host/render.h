@@ -23,9 +23,60 @@ const char *renderer_device_name(const renderer *r);
 /* Uploads a finished scene (see scene_finish) and builds the kernels for its features. */
 int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen);
 
-/* Renders the whole image: ray generation, then per depth one intersection and one
- * shading pass. img is allocated here (free with image_free). */
+/* Quality and mode settings. Set them before renderer_set_scene (they can change the
+ * kernel build); changing them later rebuilds on the next render. */
+#define RENDER_ROBUST 0 /* watertight, error-bounded intersection and ray offsets */
+#define RENDER_FAST 1   /* fast relaxed math and a plain fixed epsilon */
+typedef struct {
+    int spp;       /* samples per pixel, >= 1: 1 = the pixel centre, else a deterministic
+                    * stratified pattern (a ceil(sqrt(spp)) grid, cells taken in order) */
+    int precision; /* RENDER_ROBUST (default) or RENDER_FAST */
+    int spd;       /* SPD testing mode: rays through the (nx+1)x(ny+1) pixel corners, the
+                    * four corners averaged per pixel (spp is then ignored) */
+    int stats;     /* count rays on the device (compiled in only when set) */
+} render_settings;
+
+void render_settings_default(render_settings *st);
+int renderer_set_settings(renderer *r, const render_settings *st, char *err, size_t errlen);
+
+/* Ray counts (when settings.stats) and times of the last renderer_set_scene and
+ * renderer_render, in seconds. */
+typedef struct {
+    unsigned long long eye_rays, eye_hits;
+    unsigned long long shadow_rays, shadow_blocked;
+    unsigned long long secondary_rays, secondary_hits;
+    double build_s;   /* acceleration structure build on the host */
+    double compile_s; /* kernel program build (0 when the program was already built) */
+    double upload_s;  /* buffer creation and upload */
+    double trace_s;   /* last renderer_render */
+    int passes;       /* kernel passes (depth levels) of the last render */
+} render_stats;
+void renderer_get_stats(const renderer *r, render_stats *st);
+
+/* Progress callback: called during renderer_render after each batch of work with the
+ * fraction done (0..1] and the number of rays traced so far (camera, shadow and secondary
+ * rays). Returning non-zero cancels the render (renderer_render then fails with
+ * "render cancelled"). fn NULL: no callback. */
+typedef int (*render_progress_fn)(void *ctx, double fraction, unsigned long long rays);
+void renderer_set_progress(renderer *r, render_progress_fn fn, void *ctx);
+
+/* Renders the whole image with the current settings: every sample of every row, then
+ * reads it back. img is allocated here (free with image_free). */
 int renderer_render(renderer *r, image *img, char *err, size_t errlen);
+
+/* Progressive rendering (the preview window uses these).
+ * renderer_set_view takes the camera, image size, maximum depth and background of s (a
+ * finished scene with the same geometry as the uploaded one: only those fields are read)
+ * and clears the accumulation buffer. Cheap: no upload, no rebuild.
+ * renderer_trace adds sample number `sample` (0-based; of the pattern for settings.spp,
+ * wrapping around past spp) for image rows [row0, row0 + nrows), row 0 at the top, to the
+ * accumulation buffer. It only enqueues work and waits for it: call it with a few rows at a
+ * time to stay responsive.
+ * renderer_read returns the accumulated image, each pixel divided by the number of
+ * samples it received (pixels with none are black). */
+int renderer_set_view(renderer *r, const scene *s, char *err, size_t errlen);
+int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size_t errlen);
+int renderer_read(renderer *r, image *img, char *err, size_t errlen);
 
 /* For tests: runs the ray-generation kernel and returns nx*ny rays (rays must hold that
  * many), and runs the intersection kernel on the given rays. */

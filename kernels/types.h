@@ -39,6 +39,16 @@ typedef struct {
     int axis;        /* dominant axis of the normal, dropped for the 2-D inside test */
 } cw_polygon;
 
+/* One node of the flattened bounding volume hierarchy (depth-first order: an interior
+ * node's first child is the next node). */
+typedef struct {
+    float lo[3];
+    int start; /* leaf: first entry in the primitive-reference array;
+                * interior: index of the second child */
+    float hi[3];
+    int count; /* leaf: number of primitives (> 0); interior: -(split axis) (0, -1, -2) */
+} cw_bvh_node;
+
 typedef struct {
     cw_float4 ka; /* rgb ambient, w: Phong exponent p */
     cw_float4 kd; /* rgb diffuse */
