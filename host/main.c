@@ -25,6 +25,14 @@ static void usage(FILE *f)
             "  -H, --height N        image height in pixels (default: the scene's)\n"
             "  -d, --depth N         maximum ray depth, the eye ray being 1 (default: the\n"
             "                        scene's, else 5)\n"
+            "      --spp N           samples per pixel, a deterministic stratified pattern\n"
+            "                        (default: 1, the pixel centre)\n"
+            "      --precision P     robust (default): watertight, error-bounded intersection;\n"
+            "                        fast: fast relaxed math and a fixed epsilon\n"
+            "      --spd             SPD testing procedure: rays through the pixel corners,\n"
+            "                        four corners averaged per pixel\n"
+            "      --stats           count rays (eye, shadow, secondary; hits) and print them\n"
+            "                        with the time of each phase\n"
             "      --device SPEC     OpenCL device: P:D (platform:device as --list-devices\n"
             "                        prints) or part of its name (default: the first CPU device)\n"
             "      --list-devices    list the OpenCL platforms and devices, then exit\n"
@@ -89,12 +97,16 @@ static void warn_unrendered(const scene *s)
 
 int main(int argc, char **argv)
 {
-    enum { OPT_DEVICE = 256, OPT_LIST, OPT_VERSION };
+    enum { OPT_DEVICE = 256, OPT_LIST, OPT_VERSION, OPT_SPP, OPT_PRECISION, OPT_SPD, OPT_STATS };
     static const struct option longopts[] = {{"output", required_argument, NULL, 'o'},
                                              {"width", required_argument, NULL, 'W'},
                                              {"height", required_argument, NULL, 'H'},
                                              {"depth", required_argument, NULL, 'd'},
                                              {"device", required_argument, NULL, OPT_DEVICE},
+                                             {"spp", required_argument, NULL, OPT_SPP},
+                                             {"precision", required_argument, NULL, OPT_PRECISION},
+                                             {"spd", no_argument, NULL, OPT_SPD},
+                                             {"stats", no_argument, NULL, OPT_STATS},
                                              {"list-devices", no_argument, NULL, OPT_LIST},
                                              {"quiet", no_argument, NULL, 'q'},
                                              {"help", no_argument, NULL, 'h'},
@@ -108,6 +120,10 @@ int main(int argc, char **argv)
     renderer *r = NULL;
     image img = {0, 0, NULL};
     double t0, t_load, t_setup, t_render;
+    render_settings settings;
+    render_stats st;
+
+    render_settings_default(&settings);
 
     while ((c = getopt_long(argc, argv, "o:W:H:d:qh", longopts, NULL)) != -1) {
         switch (c) {
@@ -128,6 +144,29 @@ int main(int argc, char **argv)
             break;
         case OPT_DEVICE:
             device = optarg;
+            break;
+        case OPT_SPP:
+            if (parse_int("--spp", optarg, 1, 65536, &settings.spp))
+                return 2;
+            break;
+        case OPT_PRECISION:
+            if (strcmp(optarg, "robust") == 0)
+                settings.precision = RENDER_ROBUST;
+            else if (strcmp(optarg, "fast") == 0)
+                settings.precision = RENDER_FAST;
+            else {
+                fprintf(stderr,
+                        "clwhitted: --precision expects 'robust' or 'fast', got '%s'\n"
+                        "Try 'clwhitted --help'.\n",
+                        optarg);
+                return 2;
+            }
+            break;
+        case OPT_SPD:
+            settings.spd = 1;
+            break;
+        case OPT_STATS:
+            settings.stats = 1;
             break;
         case OPT_LIST:
             list = 1;
@@ -182,6 +221,7 @@ int main(int argc, char **argv)
         warn_unrendered(&s);
     t_load = now_seconds();
     if (renderer_create(&r, device, err, sizeof err) != 0 ||
+        renderer_set_settings(r, &settings, err, sizeof err) != 0 ||
         renderer_set_scene(r, &s, err, sizeof err) != 0) {
         fprintf(stderr, "clwhitted: %s\n", err);
         goto out_destroy;
@@ -201,6 +241,16 @@ int main(int argc, char **argv)
                "render %.3f s\n",
                output, s.width, s.height, s.max_depth, renderer_device_name(r), t_load - t0,
                t_setup - t_load, t_render - t_setup);
+    if (settings.stats) {
+        renderer_get_stats(r, &st);
+        printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu "
+               "(hit %llu)\n",
+               st.eye_rays, st.eye_hits, st.shadow_rays, st.shadow_blocked, st.secondary_rays,
+               st.secondary_hits);
+        printf("time: parse %.3f s, build %.3f s, compile %.3f s, upload %.3f s, trace %.3f s "
+               "(%d passes)\n",
+               t_load - t0, st.build_s, st.compile_s, st.upload_s, st.trace_s, st.passes);
+    }
     rc = 0;
 out_free_image:
     image_free(&img);

@@ -7,10 +7,18 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <CL/cl.h>
 
 #include "clerr.h"
+
+static double seconds_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
 
 extern const char cw_kernel_source[];
 
@@ -31,7 +39,7 @@ struct renderer {
     cl_context ctx;
     cl_command_queue queue;
     cl_program program;
-    char options[512]; /* build options of `program` */
+    char options[1024]; /* build options of `program` */
     cl_kernel k_raygen, k_intersect, k_shade;
     /* scene buffers */
     cl_mem frame, spheres, triangles, polygons, verts, lights, materials;
@@ -40,6 +48,12 @@ struct renderer {
     /* work buffers, grown on demand */
     cl_mem rays, hits, image, alive;
     size_t ray_cap, image_cap;
+    /* settings, stats, progress */
+    render_settings settings;
+    char base_options[512]; /* the scene's feature options, without the settings' */
+    render_stats stats;
+    render_progress_fn progress;
+    void *progress_ctx;
 };
 
 /* Reports a failed OpenCL call with its name, the error name and the device. */
@@ -237,6 +251,7 @@ int renderer_create(renderer **out, const char *spec, char *err, size_t errlen)
         snprintf(err, errlen, "out of memory");
         return -1;
     }
+    render_settings_default(&r->settings);
     if (find_device(spec, &r->device, err, errlen) != 0)
         goto out_free;
     e = clGetDeviceInfo(r->device, CL_DEVICE_NAME, sizeof r->device_name, r->device_name, NULL);
@@ -331,26 +346,36 @@ static int any_mirror(const scene *s)
     return 0;
 }
 
-/* The kernel build options for a scene: every feature flag is decided here.
- * CLWHITTED_BUILD_OPTIONS, if set, is appended (e.g. -cl-fast-relaxed-math). */
+/* The kernel build options for a scene: every feature flag is decided here, from the
+ * scene (base) and the settings. CLWHITTED_BUILD_OPTIONS, if set, is appended. */
 static void scene_build_options(const scene *s, int num_polygons, char *buf, size_t n)
 {
-    const char *extra = getenv("CLWHITTED_BUILD_OPTIONS");
     snprintf(buf, n,
              "-cl-std=CL1.2 -Werror -DCW_HAS_SPHERES=%d -DCW_HAS_TRIANGLES=%d "
-             "-DCW_HAS_POLYGONS=%d -DCW_HAS_MIRRORS=%d%s%s",
+             "-DCW_HAS_POLYGONS=%d -DCW_HAS_MIRRORS=%d",
              s->spheres.count > 0, s->triangles.count > 0, num_polygons > 0,
-             any_mirror(s) && s->max_depth > 1, extra ? " " : "", extra ? extra : "");
+             any_mirror(s) && s->max_depth > 1);
+}
+
+static void full_build_options(const renderer *r, char *buf, size_t n)
+{
+    const char *extra = getenv("CLWHITTED_BUILD_OPTIONS");
+    snprintf(buf, n, "%s -DCW_FAST=%d -DCW_STATS=%d%s%s%s", r->base_options,
+             r->settings.precision == RENDER_FAST, r->settings.stats != 0,
+             r->settings.precision == RENDER_FAST ? " -cl-fast-relaxed-math" : "", extra ? " " : "",
+             extra ? extra : "");
 }
 
 static int build_program(renderer *r, const char *options, char *err, size_t errlen)
 {
     const char *src = cw_kernel_source;
     cl_int e;
+    double t0;
 
     if (r->program && strcmp(r->options, options) == 0)
         return 0;
     release_program(r);
+    t0 = seconds_now();
     r->program = clCreateProgramWithSource(r->ctx, 1, &src, NULL, &e);
     if (e != CL_SUCCESS)
         return cl_fail(e, "clCreateProgramWithSource", r, err, errlen);
@@ -385,7 +410,16 @@ static int build_program(renderer *r, const char *options, char *err, size_t err
         return -1;
     }
     snprintf(r->options, sizeof r->options, "%s", options);
+    r->stats.compile_s = seconds_now() - t0;
     return 0;
+}
+
+/* Builds the program for the scene's features and the current settings, unless built. */
+static int ensure_program(renderer *r, char *err, size_t errlen)
+{
+    char options[1024];
+    full_build_options(r, options, sizeof options);
+    return build_program(r, options, err, errlen);
 }
 
 /* ---- scene upload ----------------------------------------------------------------- */
@@ -458,6 +492,30 @@ static int convert_polygons(const scene *s, cw_polygon **out, int *count, char *
     return 0;
 }
 
+/* The view part of the frame: camera, size, depth, background and ambient. */
+static void fill_view(cw_frame *f, const scene *s)
+{
+    const scene_camera *c = &s->camera;
+    f->eye = f4(c->eye, 0);
+    f->u = f4(c->u, 0);
+    f->v = f4(c->v, 0);
+    f->w = f4(c->w, 0);
+    f->dir = f4(c->dir, 0);
+    f->window.x = c->l;
+    f->window.y = c->r;
+    f->window.z = c->b;
+    f->window.w = c->t;
+    f->background = f4(s->background, 0);
+    f->ambient = f4(s->ambient, 0);
+    f->d = c->d;
+    f->projection = c->projection == SCENE_ORTHOGRAPHIC ? CW_PROJ_ORTHOGRAPHIC
+                    : c->projection == SCENE_OBLIQUE    ? CW_PROJ_OBLIQUE
+                                                        : CW_PROJ_PERSPECTIVE;
+    f->nx = s->width;
+    f->ny = s->height;
+    f->max_depth = s->max_depth;
+}
+
 int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
 {
     size_t i;
@@ -469,10 +527,10 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     cw_light *lights = NULL;
     cw_material *mats = NULL;
     cw_frame *f = &r->host_frame;
-    const scene_camera *c = &s->camera;
-    char options[512];
+    double t0, t1;
 
     release_scene(r);
+    memset(f, 0, sizeof *f);
     sph = calloc(s->spheres.count + 1, sizeof *sph);
     tri = calloc(s->triangles.count + 1, sizeof *tri);
     verts = calloc(s->poly_verts.count + 1, sizeof *verts);
@@ -516,33 +574,17 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
         mats[i].kt = f4(sm->kt, sm->ior);
     }
 
-    memset(f, 0, sizeof *f);
-    f->eye = f4(c->eye, 0);
-    f->u = f4(c->u, 0);
-    f->v = f4(c->v, 0);
-    f->w = f4(c->w, 0);
-    f->dir = f4(c->dir, 0);
-    f->window.x = c->l;
-    f->window.y = c->r;
-    f->window.z = c->b;
-    f->window.w = c->t;
-    f->background = f4(s->background, 0);
-    f->ambient = f4(s->ambient, 0);
-    f->d = c->d;
-    f->projection = c->projection == SCENE_ORTHOGRAPHIC ? CW_PROJ_ORTHOGRAPHIC
-                    : c->projection == SCENE_OBLIQUE    ? CW_PROJ_OBLIQUE
-                                                        : CW_PROJ_PERSPECTIVE;
-    f->nx = s->width;
-    f->ny = s->height;
-    f->max_depth = s->max_depth;
+    fill_view(f, s);
     f->num_spheres = (int)s->spheres.count;
     f->num_triangles = (int)s->triangles.count;
     f->num_polygons = npoly;
     f->num_lights = (int)s->lights.count;
 
-    scene_build_options(s, npoly, options, sizeof options);
-    if (build_program(r, options, err, errlen) != 0)
+    scene_build_options(s, npoly, r->base_options, sizeof r->base_options);
+    t0 = seconds_now();
+    if (ensure_program(r, err, errlen) != 0)
         goto out_free;
+    t1 = seconds_now();
     if (upload(r, &r->frame, f, 1, sizeof *f, "frame", err, errlen) ||
         upload(r, &r->spheres, sph, s->spheres.count, sizeof *sph, "spheres", err, errlen) ||
         upload(r, &r->triangles, tri, s->triangles.count, sizeof *tri, "triangles", err, errlen) ||
@@ -556,6 +598,8 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
         goto out_free;
     }
     r->have_scene = 1;
+    r->stats.upload_s = seconds_now() - t1;
+    (void)t0;
     rc = 0;
 out_free:
     free(sph);
@@ -641,16 +685,25 @@ static int need_scene(const renderer *r, char *err, size_t errlen)
     return 0;
 }
 
-/* One eye ray per pixel, launched over the image in 2-D (no index division in the
- * kernel). */
-static int run_raygen(renderer *r, char *err, size_t errlen)
+/* One eye ray per pixel of rows [row0, row0 + nrows), launched in 2-D (no index division
+ * in the kernel); (sx, sy) is the sample's position inside the pixel. Each pixel's
+ * accumulated sample count (image .w) goes up by one. */
+static int run_raygen(renderer *r, int row0, int nrows, float sx, float sy, char *err,
+                      size_t errlen)
 {
+    const char *k = "cw_raygen";
     size_t global[2];
     cl_int e;
+    cl_int crow0 = row0, cnrows = nrows;
     global[0] = ((size_t)r->host_frame.nx + 7) / 8 * 8;
-    global[1] = ((size_t)r->host_frame.ny + 7) / 8 * 8;
-    if (set_arg(r->k_raygen, 0, sizeof(cl_mem), &r->frame, "cw_raygen", r, err, errlen) ||
-        set_arg(r->k_raygen, 1, sizeof(cl_mem), &r->rays, "cw_raygen", r, err, errlen))
+    global[1] = ((size_t)nrows + 7) / 8 * 8;
+    if (set_arg(r->k_raygen, 0, sizeof(cl_mem), &r->frame, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 1, sizeof(cl_mem), &r->rays, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 2, sizeof(cl_mem), &r->image, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 3, sizeof crow0, &crow0, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 4, sizeof cnrows, &cnrows, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 5, sizeof sx, &sx, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 6, sizeof sy, &sy, k, r, err, errlen))
         return -1;
     e = clEnqueueNDRangeKernel(r->queue, r->k_raygen, 2, NULL, global, NULL, 0, NULL, NULL);
     if (e != CL_SUCCESS)
@@ -705,27 +758,88 @@ static int read_buffer(renderer *r, cl_mem m, size_t size, void *dst, const char
     return 0;
 }
 
-int renderer_render(renderer *r, image *img, char *err, size_t errlen)
+/* The position of sample k (mod spp) inside its pixel: a ceil(sqrt(spp)) x rows grid of
+ * cell centres, taken row by row. spp = 1: the pixel centre. */
+static void sample_position(int spp, int k, float *sx, float *sy)
 {
-    size_t n, i;
-    int depth;
-    cl_float4 *px = NULL;
+    int gx = 1, gy;
+    if (spp < 1)
+        spp = 1;
+    while (gx * gx < spp)
+        gx++;
+    gy = (spp + gx - 1) / gx;
+    k %= spp;
+    *sx = ((float)(k % gx) + 0.5f) / (float)gx;
+    *sy = ((float)(k / gx) + 0.5f) / (float)gy;
+}
 
-    if (need_scene(r, err, errlen))
+static int clear_accumulation(renderer *r, char *err, size_t errlen)
+{
+    size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
+    return ensure_work(r, n, err, errlen) ||
+           fill_zero(r, r->image, n * sizeof(cl_float4), "image", err, errlen);
+}
+
+/* Traces one sample for a band of rows: ray generation, then per depth one intersection
+ * and one shading pass. progress: report after each pass, with the fraction done before
+ * this band (done) and the band's share (share). */
+static int trace_band(renderer *r, int sample, int row0, int nrows, double done, double share,
+                      char *err, size_t errlen)
+{
+    size_t n = (size_t)r->host_frame.nx * (size_t)nrows;
+    float sx, sy;
+    int depth;
+
+    sample_position(r->settings.spp, sample, &sx, &sy);
+    if (run_raygen(r, row0, nrows, sx, sy, err, errlen))
         return -1;
-    n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    if (ensure_work(r, n, err, errlen) || run_raygen(r, err, errlen) ||
-        fill_zero(r, r->image, n * sizeof(cl_float4), "image", err, errlen))
-        return -1;
+    r->stats.eye_rays += n;
     for (depth = 1; depth <= r->host_frame.max_depth; depth++) {
         cl_int alive = 0;
         if (fill_zero(r, r->alive, sizeof(cl_int), "alive counter", err, errlen) ||
             run_intersect(r, (cl_int)n, err, errlen) || run_shade(r, (cl_int)n, err, errlen) ||
             read_buffer(r, r->alive, sizeof alive, &alive, "alive counter", err, errlen))
             return -1;
+        r->stats.passes++;
+        if (depth < r->host_frame.max_depth)
+            r->stats.secondary_rays += (unsigned long long)alive;
+        if (r->progress &&
+            r->progress(r->progress_ctx,
+                        done + share * (alive == 0 ? 1.0 : (double)depth / r->host_frame.max_depth),
+                        r->stats.eye_rays + r->stats.secondary_rays) != 0) {
+            snprintf(err, errlen, "render cancelled");
+            return -1;
+        }
         if (alive == 0)
             break;
     }
+    return 0;
+}
+
+int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size_t errlen)
+{
+    if (need_scene(r, err, errlen) || ensure_program(r, err, errlen))
+        return -1;
+    if (sample < 0 || row0 < 0 || nrows < 1 || row0 + nrows > r->host_frame.ny) {
+        snprintf(err, errlen, "renderer_trace: sample %d, rows %d..%d outside the %d-row image",
+                 sample, row0, row0 + nrows - 1, r->host_frame.ny);
+        return -1;
+    }
+    if (ensure_work(r, (size_t)r->host_frame.nx * (size_t)r->host_frame.ny, err, errlen))
+        return -1;
+    return trace_band(r, sample, row0, nrows, 0.0, 1.0, err, errlen);
+}
+
+int renderer_read(renderer *r, image *img, char *err, size_t errlen)
+{
+    size_t n, i;
+    cl_float4 *px = NULL;
+
+    if (need_scene(r, err, errlen))
+        return -1;
+    n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
+    if (ensure_work(r, n, err, errlen))
+        return -1;
     px = malloc(n * sizeof *px);
     if (!px) {
         snprintf(err, errlen, "out of memory for a %zu-pixel image", n);
@@ -738,9 +852,10 @@ int renderer_render(renderer *r, image *img, char *err, size_t errlen)
         goto out_free;
     }
     for (i = 0; i < n; i++) {
-        img->rgb[3 * i + 0] = px[i].s[0];
-        img->rgb[3 * i + 1] = px[i].s[1];
-        img->rgb[3 * i + 2] = px[i].s[2];
+        float w = px[i].s[3] > 0 ? 1.0f / px[i].s[3] : 0.0f;
+        img->rgb[3 * i + 0] = px[i].s[0] * w;
+        img->rgb[3 * i + 1] = px[i].s[1] * w;
+        img->rgb[3 * i + 2] = px[i].s[2] * w;
     }
     free(px);
     return 0;
@@ -749,13 +864,94 @@ out_free:
     return -1;
 }
 
+int renderer_render(renderer *r, image *img, char *err, size_t errlen)
+{
+    int k, spp = r->settings.spp < 1 ? 1 : r->settings.spp;
+    double t0;
+
+    if (need_scene(r, err, errlen) || ensure_program(r, err, errlen))
+        return -1;
+    if (r->settings.spd) {
+        snprintf(err, errlen, "SPD mode is not implemented yet");
+        return -1;
+    }
+    t0 = seconds_now();
+    r->stats.eye_rays = r->stats.eye_hits = 0;
+    r->stats.shadow_rays = r->stats.shadow_blocked = 0;
+    r->stats.secondary_rays = r->stats.secondary_hits = 0;
+    r->stats.passes = 0;
+    if (clear_accumulation(r, err, errlen))
+        return -1;
+    for (k = 0; k < spp; k++)
+        if (trace_band(r, k, 0, r->host_frame.ny, (double)k / spp, 1.0 / spp, err, errlen))
+            return -1;
+    if (renderer_read(r, img, err, errlen))
+        return -1;
+    r->stats.trace_s = seconds_now() - t0;
+    return 0;
+}
+
+int renderer_set_view(renderer *r, const scene *s, char *err, size_t errlen)
+{
+    cw_frame *f = &r->host_frame;
+    cl_int e;
+    if (need_scene(r, err, errlen))
+        return -1;
+    if (s->width < 1 || s->height < 1) {
+        snprintf(err, errlen, "renderer_set_view: bad image size %dx%d", s->width, s->height);
+        return -1;
+    }
+    fill_view(f, s);
+    /* the mirror feature depends on the depth */
+    scene_build_options(s, f->num_polygons, r->base_options, sizeof r->base_options);
+    e = clEnqueueWriteBuffer(r->queue, r->frame, CL_TRUE, 0, sizeof *f, f, 0, NULL, NULL);
+    if (e != CL_SUCCESS)
+        return cl_fail(e, "clEnqueueWriteBuffer(frame)", r, err, errlen);
+    return clear_accumulation(r, err, errlen);
+}
+
+void render_settings_default(render_settings *st)
+{
+    memset(st, 0, sizeof *st);
+    st->spp = 1;
+    st->precision = RENDER_ROBUST;
+}
+
+int renderer_set_settings(renderer *r, const render_settings *st, char *err, size_t errlen)
+{
+    if (st->spp < 1 || st->spp > 65536) {
+        snprintf(err, errlen, "samples per pixel must be in 1..65536, got %d", st->spp);
+        return -1;
+    }
+    if (st->precision != RENDER_ROBUST && st->precision != RENDER_FAST) {
+        snprintf(err, errlen, "unknown precision setting %d", st->precision);
+        return -1;
+    }
+    r->settings = *st;
+    return 0;
+}
+
+void renderer_get_stats(const renderer *r, render_stats *st)
+{
+    *st = r->stats;
+}
+
+void renderer_set_progress(renderer *r, render_progress_fn fn, void *ctx)
+{
+    r->progress = fn;
+    r->progress_ctx = ctx;
+}
+
 int renderer_generate_rays(renderer *r, cw_ray *rays, char *err, size_t errlen)
 {
     size_t n;
     if (need_scene(r, err, errlen))
         return -1;
+    if (ensure_program(r, err, errlen))
+        return -1;
     n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    if (ensure_work(r, n, err, errlen) || run_raygen(r, err, errlen) ||
+    if (ensure_work(r, n, err, errlen) ||
+        run_raygen(r, 0, r->host_frame.ny, 0.5f, 0.5f, err, errlen) ||
         read_buffer(r, r->rays, n * sizeof *rays, rays, "rays", err, errlen))
         return -1;
     return 0;
@@ -765,7 +961,7 @@ int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, cha
                        size_t errlen)
 {
     cl_int e;
-    if (need_scene(r, err, errlen))
+    if (need_scene(r, err, errlen) || ensure_program(r, err, errlen))
         return -1;
     if (n <= 0) {
         snprintf(err, errlen, "renderer_intersect: no rays");

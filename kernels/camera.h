@@ -4,12 +4,13 @@
 
 #include "types.h"
 
-/* The eye ray through the centre of pixel (i, j), j counted from the bottom row:
+/* The eye ray through the point (i + sx, j + sy) of pixel (i, j), j counted from the
+ * bottom row; (sx, sy) = (0.5, 0.5) is the pixel centre of Shirley & Marschner:
  * u = l + (r-l)(i+0.5)/nx, v = b + (t-b)(j+0.5)/ny. */
-CW_INLINE cw_ray cam_ray(CW_GLOBAL const cw_frame *f, int i, int j)
+CW_INLINE cw_ray cam_ray(CW_GLOBAL const cw_frame *f, int i, int j, float sx, float sy)
 {
-    float su = f->window.x + (f->window.y - f->window.x) * ((float)i + 0.5f) / (float)f->nx;
-    float sv = f->window.z + (f->window.w - f->window.z) * ((float)j + 0.5f) / (float)f->ny;
+    float su = f->window.x + (f->window.y - f->window.x) * ((float)i + sx) / (float)f->nx;
+    float sv = f->window.z + (f->window.w - f->window.z) * ((float)j + sy) / (float)f->ny;
     vec3 e = v3_from4(f->eye);
     vec3 u = v3_from4(f->u);
     vec3 v = v3_from4(f->v);

@@ -8,8 +8,8 @@
 #error "feature flags CW_HAS_* must be 0 or 1"
 #endif
 
-#define CW_WORLD_ARGS                                                                       \
-    __global const cw_sphere *spheres, __global const cw_triangle *triangles,               \
+#define CW_WORLD_ARGS                                                                              \
+    __global const cw_sphere *spheres, __global const cw_triangle *triangles,                      \
         __global const cw_polygon *polygons, __global const float4 *poly_verts
 
 static cw_world make_world(__global const cw_frame *f, __global const cw_sphere *spheres,
@@ -27,14 +27,21 @@ static cw_world make_world(__global const cw_frame *f, __global const cw_sphere 
     return w;
 }
 
-/* 2-D launch: x = column, y = image row (0 at the top). */
-__kernel void cw_raygen(__global const cw_frame *f, __global cw_ray *rays)
+/* 2-D launch over a band of rows: x = column, y = row within the band (image row 0 at
+ * the top). Ray k of the band is pixel (x, row0 + y); the pixel's sample count (.w of
+ * the accumulation image) goes up by one. */
+__kernel void cw_raygen(__global const cw_frame *f, __global cw_ray *rays, __global float4 *image,
+                        int row0, int nrows, float sx, float sy)
 {
     int x = (int)get_global_id(0);
-    int row = (int)get_global_id(1);
-    if (x >= f->nx || row >= f->ny)
+    int y = (int)get_global_id(1);
+    int row = row0 + y;
+    cw_ray ray;
+    if (x >= f->nx || y >= nrows)
         return;
-    rays[row * f->nx + x] = cam_ray(f, x, f->ny - 1 - row);
+    ray = cam_ray(f, x, f->ny - 1 - row, sx, sy);
+    rays[y * f->nx + x] = ray;
+    image[ray.pixel].w += 1.0f;
 }
 
 __kernel void cw_intersect(__global const cw_frame *f, CW_WORLD_ARGS, __global const cw_ray *rays,
@@ -57,8 +64,8 @@ __kernel void cw_intersect(__global const cw_frame *f, CW_WORLD_ARGS, __global c
  * the same pixel. */
 __kernel void cw_shade(__global const cw_frame *f, CW_WORLD_ARGS, __global const cw_light *lights,
                        __global const cw_material *materials, __global cw_ray *rays,
-                       __global const cw_hit *hits, __global float4 *image,
-                       __global int *alive, int n)
+                       __global const cw_hit *hits, __global float4 *image, __global int *alive,
+                       int n)
 {
     int gid = (int)get_global_id(0);
     cw_world w;
