@@ -1,0 +1,46 @@
+/* The bounding volume hierarchy: a binned surface-area-heuristic (SAH) builder over
+ * axis-aligned boxes, flattened depth-first into cw_bvh_node (kernels/types.h) for the
+ * kernels. */
+#ifndef CW_BVH_H
+#define CW_BVH_H
+
+#include <stddef.h>
+
+#include "types.h"
+
+/* Every tree bvh_build returns is at most this deep (root = 1), whatever the input: a
+ * traversal stack of BVH_MAX_DEPTH entries always suffices. */
+#define BVH_MAX_DEPTH 64
+/* Largest leaf made when all centroids of a node coincide (no split can separate them),
+ * unless max_leaf is larger; bigger sets are split by count. */
+#define BVH_COINCIDENT_LEAF 64
+/* Largest n bvh_build accepts (the node count, at most 2n - 1, must fit an int). */
+#define BVH_MAX_PRIMS (1 << 29)
+
+typedef struct {
+    float lo[3], hi[3];
+} bvh_box;
+
+typedef struct {
+    cw_bvh_node *nodes; /* depth-first: an interior node's first child is the next node */
+    int num_nodes;
+    int *refs; /* leaf entries: indices into the input box array, each input primitive once */
+    int num_refs;
+    int depth; /* maximum depth (root = 1; 0 for an empty tree) */
+} bvh;
+
+/* Builds over n boxes (n >= 0); n == 0 gives an empty tree (num_nodes == 0, NULL arrays).
+ * max_leaf (>= 1): most primitives per leaf; a leaf may be larger (up to
+ * max(max_leaf, BVH_COINCIDENT_LEAF)) only when all its centroids coincide. Boxes with NaN
+ * or infinite coordinates give a valid tree (every primitive once, bounded depth) whose
+ * boxes need not contain them. Returns 0, or -1 with a message in err (out of memory,
+ * n or max_leaf out of range); on failure *out is an empty tree. */
+int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, size_t errlen);
+void bvh_free(bvh *b);
+
+/* SAH cost of a built tree: the sum over nodes of area(node) / area(root) times C_trav = 1
+ * for an interior node or count * C_isect (C_isect = 1) for a leaf. A root of zero or
+ * non-finite area weights every node by 1. 0 for an empty tree. */
+double bvh_sah_cost(const bvh *b);
+
+#endif

@@ -1,0 +1,854 @@
+/* Tests for the BVH builder (host/bvh.c): the structural invariants of the flattened tree
+ * on random and degenerate box sets, closest hits by a reference traversal against brute
+ * force, SAH quality, and the figures of a one-million-triangle build (printed, not
+ * asserted: timings are noisy). No OpenCL. */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "testutil.h"
+
+#include "bvh.h"
+
+/* ======================================================================================== */
+/* Helpers                                                                                  */
+
+/* splitmix64: the same numbers on every machine. */
+static uint64_t rng_state;
+
+static void rng_seed(uint64_t seed)
+{
+    rng_state = seed;
+}
+
+static uint64_t rng_next(void)
+{
+    uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* uniform in [0, 1) */
+static float rnd(void)
+{
+    return (float)(rng_next() >> 40) * (1.0f / 16777216.0f);
+}
+
+static float rnd_range(float a, float b)
+{
+    return a + (b - a) * rnd();
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static bvh_box *alloc_boxes(int n)
+{
+    bvh_box *b = malloc((size_t)(n > 0 ? n : 1) * sizeof *b);
+    assert_non_null(b);
+    return b;
+}
+
+static void set_box(bvh_box *b, float x, float y, float z, float hx, float hy, float hz)
+{
+    b->lo[0] = x - hx;
+    b->lo[1] = y - hy;
+    b->lo[2] = z - hz;
+    b->hi[0] = x + hx;
+    b->hi[1] = y + hy;
+    b->hi[2] = z + hz;
+}
+
+/* n random boxes: centres uniform in [0, extent)^3, half-sizes in [0, size). */
+static bvh_box *random_boxes(int n, uint64_t seed, float extent, float size)
+{
+    bvh_box *b = alloc_boxes(n);
+    rng_seed(seed);
+    for (int i = 0; i < n; i++) {
+        float x = rnd() * extent, y = rnd() * extent, z = rnd() * extent;
+        set_box(&b[i], x, y, z, rnd() * size, rnd() * size, rnd() * size);
+    }
+    return b;
+}
+
+static void build_ok(bvh *t, const bvh_box *boxes, int n, int max_leaf)
+{
+    char err[256] = "";
+    if (bvh_build(t, boxes, n, max_leaf, err, sizeof err) != 0)
+        fail_msg("bvh_build(n = %d, max_leaf = %d) failed: %s", n, max_leaf, err);
+}
+
+/* ======================================================================================== */
+/* Structural invariants                                                                    */
+
+typedef struct {
+    const bvh *t;
+    const bvh_box *boxes;
+    int n, max_leaf;
+    int finite; /* check boxes (containment, tightness, split order) */
+    const char *what;
+    int next_node, next_ref, max_depth, leaves, big_leaves;
+    unsigned char *seen;
+} checker;
+
+static int box_equal(const float alo[3], const float ahi[3], const float blo[3], const float bhi[3])
+{
+    for (int a = 0; a < 3; a++)
+        if (alo[a] != blo[a] || ahi[a] != bhi[a])
+            return 0;
+    return 1;
+}
+
+/* Checks the subtree at node i (depth: of i), visited in depth-first order; returns the
+ * bounds of its doubled centroids (lo + hi, as the builder bins them) and its box. */
+static void check_node(checker *ck, int i, int depth, float clo[3], float chi[3], float lo[3],
+                       float hi[3])
+{
+    const cw_bvh_node *nd;
+    if (depth > BVH_MAX_DEPTH)
+        fail_msg("%s: depth %d exceeds BVH_MAX_DEPTH", ck->what, depth);
+    if (i != ck->next_node || i < 0 || i >= ck->t->num_nodes)
+        fail_msg("%s: node %d is not next in depth-first order (expected %d of %d)", ck->what, i,
+                 ck->next_node, ck->t->num_nodes);
+    ck->next_node++;
+    if (depth > ck->max_depth)
+        ck->max_depth = depth;
+    nd = &ck->t->nodes[i];
+    for (int a = 0; a < 3; a++) {
+        clo[a] = lo[a] = INFINITY;
+        chi[a] = hi[a] = -INFINITY;
+    }
+    if (nd->count > 0) {
+        int coincident = 1;
+        if (nd->start != ck->next_ref || nd->start + nd->count > ck->t->num_refs)
+            fail_msg("%s: leaf %d covers refs [%d, %d), expected to start at %d of %d", ck->what, i,
+                     nd->start, nd->start + nd->count, ck->next_ref, ck->t->num_refs);
+        for (int k = nd->start; k < nd->start + nd->count; k++) {
+            int r = ck->t->refs[k];
+            const bvh_box *b;
+            if (r < 0 || r >= ck->n)
+                fail_msg("%s: refs[%d] = %d out of range", ck->what, k, r);
+            if (ck->seen[r])
+                fail_msg("%s: primitive %d appears twice", ck->what, r);
+            ck->seen[r] = 1;
+            b = &ck->boxes[r];
+            for (int a = 0; a < 3; a++) {
+                float c = b->lo[a] + b->hi[a];
+                if (k > nd->start && c != clo[a])
+                    coincident = 0;
+                clo[a] = c < clo[a] ? c : clo[a];
+                chi[a] = c > chi[a] ? c : chi[a];
+                lo[a] = b->lo[a] < lo[a] ? b->lo[a] : lo[a];
+                hi[a] = b->hi[a] > hi[a] ? b->hi[a] : hi[a];
+            }
+        }
+        ck->next_ref += nd->count;
+        ck->leaves++;
+        if (nd->count > ck->max_leaf) {
+            int cap = ck->max_leaf > BVH_COINCIDENT_LEAF ? ck->max_leaf : BVH_COINCIDENT_LEAF;
+            ck->big_leaves++;
+            if (nd->count > cap)
+                fail_msg("%s: leaf %d has %d primitives (cap %d)", ck->what, i, nd->count, cap);
+            if (ck->finite && !coincident)
+                fail_msg("%s: leaf %d has %d primitives (max_leaf %d) whose centroids differ",
+                         ck->what, i, nd->count, ck->max_leaf);
+        }
+    } else {
+        int axis = -nd->count;
+        float lclo[3], lchi[3], llo[3], lhi[3], rclo[3], rchi[3], rlo[3], rhi[3];
+        if (axis < 0 || axis > 2)
+            fail_msg("%s: interior node %d has count %d", ck->what, i, nd->count);
+        check_node(ck, i + 1, depth + 1, lclo, lchi, llo, lhi);
+        if (nd->start != ck->next_node)
+            fail_msg("%s: node %d: second child %d, expected %d", ck->what, i, nd->start,
+                     ck->next_node);
+        check_node(ck, nd->start, depth + 1, rclo, rchi, rlo, rhi);
+        for (int a = 0; a < 3; a++) {
+            clo[a] = fminf(lclo[a], rclo[a]);
+            chi[a] = fmaxf(lchi[a], rchi[a]);
+            lo[a] = fminf(llo[a], rlo[a]);
+            hi[a] = fmaxf(lhi[a], rhi[a]);
+        }
+        /* the first child lies on the lower side of the split axis (the kernel visits the
+         * nearer child first by it) */
+        if (ck->finite && lchi[axis] > rclo[axis])
+            fail_msg("%s: node %d split on axis %d, but its first child's centroids reach %g "
+                     "and its second's start at %g",
+                     ck->what, i, axis, 0.5 * lchi[axis], 0.5 * rclo[axis]);
+    }
+    /* the node box is exactly the union of what is below it (so it contains it) */
+    if (ck->finite && !box_equal(nd->lo, nd->hi, lo, hi))
+        fail_msg("%s: node %d box (%g %g %g)-(%g %g %g) is not the union of its contents "
+                 "(%g %g %g)-(%g %g %g)",
+                 ck->what, i, nd->lo[0], nd->lo[1], nd->lo[2], nd->hi[0], nd->hi[1], nd->hi[2],
+                 lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+}
+
+/* Every invariant of a tree built over boxes[0, n) with max_leaf; returns the number of
+ * leaves larger than max_leaf (allowed only for coincident centroids). */
+static int check_tree(const bvh *t, const bvh_box *boxes, int n, int max_leaf, int finite,
+                      const char *what)
+{
+    checker ck;
+    float clo[3], chi[3], lo[3], hi[3];
+    memset(&ck, 0, sizeof ck);
+    ck.t = t;
+    ck.boxes = boxes;
+    ck.n = n;
+    ck.max_leaf = max_leaf;
+    ck.finite = finite;
+    ck.what = what;
+    if (t->num_refs != n)
+        fail_msg("%s: %d refs for %d primitives", what, t->num_refs, n);
+    if (n == 0) {
+        if (t->num_nodes != 0 || t->depth != 0)
+            fail_msg("%s: empty input gave %d nodes, depth %d", what, t->num_nodes, t->depth);
+        return 0;
+    }
+    if (t->num_nodes < 1 || t->num_nodes > 2 * n - 1)
+        fail_msg("%s: %d nodes for %d primitives", what, t->num_nodes, n);
+    ck.seen = calloc((size_t)n, 1);
+    assert_non_null(ck.seen);
+    check_node(&ck, 0, 1, clo, chi, lo, hi);
+    free(ck.seen);
+    if (ck.next_node != t->num_nodes)
+        fail_msg("%s: %d nodes reachable of %d", what, ck.next_node, t->num_nodes);
+    if (ck.next_ref != n)
+        fail_msg("%s: leaves cover %d refs of %d", what, ck.next_ref, n);
+    if (ck.max_depth != t->depth)
+        fail_msg("%s: depth %d reported, %d measured", what, t->depth, ck.max_depth);
+    if (ck.leaves != (t->num_nodes + 1) / 2)
+        fail_msg("%s: %d leaves in %d nodes (a binary tree has (nodes + 1) / 2)", what, ck.leaves,
+                 t->num_nodes);
+    return ck.big_leaves;
+}
+
+/* Builds, checks, frees; returns the number of leaves larger than max_leaf. */
+static int build_check(const bvh_box *boxes, int n, int max_leaf, int finite, const char *what)
+{
+    bvh t;
+    int big;
+    build_ok(&t, boxes, n, max_leaf);
+    big = check_tree(&t, boxes, n, max_leaf, finite, what);
+    printf("  %-34s n %7d  max_leaf %2d: %7d nodes, depth %2d, SAH %.4g\n", what, n, max_leaf,
+           t.num_nodes, t.depth, bvh_sah_cost(&t));
+    bvh_free(&t);
+    return big;
+}
+
+/* ======================================================================================== */
+/* Reference traversal                                                                      */
+
+typedef struct {
+    float o[3], d[3], inv[3];
+} ray;
+
+typedef struct {
+    float c[3], r;
+} sphere;
+
+/* An origin in [lo, hi)^3 and a random unit direction with no tiny component (so that
+ * the slab test needs no special cases). */
+static ray random_ray(float lo, float hi)
+{
+    ray r;
+    float len;
+    for (int a = 0; a < 3; a++)
+        r.o[a] = rnd_range(lo, hi);
+    do {
+        for (int a = 0; a < 3; a++)
+            r.d[a] = rnd_range(-1.0f, 1.0f);
+        len = sqrtf(r.d[0] * r.d[0] + r.d[1] * r.d[1] + r.d[2] * r.d[2]);
+    } while (len < 0.1f || len > 1.0f || fabsf(r.d[0]) < 1e-3f * len ||
+             fabsf(r.d[1]) < 1e-3f * len || fabsf(r.d[2]) < 1e-3f * len);
+    for (int a = 0; a < 3; a++) {
+        r.d[a] /= len;
+        r.inv[a] = 1.0f / r.d[a];
+    }
+    return r;
+}
+
+/* Slab test: the parameter interval [*t0, *t1] of the ray inside the box, clipped to
+ * [0, tmax]; 1 when not empty. Rounding is monotone, so a box containing another always
+ * gives an interval containing the other's. */
+static int slab(const ray *r, const float lo[3], const float hi[3], float tmax, float *t0,
+                float *t1)
+{
+    float a0 = 0.0f, a1 = tmax;
+    for (int a = 0; a < 3; a++) {
+        float ta = (lo[a] - r->o[a]) * r->inv[a], tb = (hi[a] - r->o[a]) * r->inv[a];
+        if (ta > tb) {
+            float s = ta;
+            ta = tb;
+            tb = s;
+        }
+        a0 = ta > a0 ? ta : a0;
+        a1 = tb < a1 ? tb : a1;
+    }
+    *t0 = a0;
+    *t1 = a1;
+    return a0 <= a1;
+}
+
+/* Box primitive: the first crossing of its surface ahead of the origin, or INFINITY. */
+static float hit_box(const ray *r, const bvh_box *b)
+{
+    float t0, t1;
+    if (!slab(r, b->lo, b->hi, INFINITY, &t0, &t1))
+        return INFINITY;
+    if (t0 > 0.0f)
+        return t0;
+    return t1 > 0.0f ? t1 : INFINITY;
+}
+
+static float hit_sphere(const ray *r, const sphere *s)
+{
+    float oc[3], b = 0.0f, c = 0.0f, disc, q, t;
+    for (int a = 0; a < 3; a++) {
+        oc[a] = r->o[a] - s->c[a];
+        b += oc[a] * r->d[a];
+        c += oc[a] * oc[a];
+    }
+    c -= s->r * s->r;
+    disc = b * b - c;
+    if (disc < 0.0f)
+        return INFINITY;
+    q = sqrtf(disc);
+    t = -b - q;
+    if (t > 1e-4f)
+        return t;
+    t = -b + q;
+    return t > 1e-4f ? t : INFINITY;
+}
+
+typedef struct {
+    const sphere *spheres; /* or NULL: the primitives are the boxes */
+    const bvh_box *boxes;
+} prims;
+
+static float hit_prim(const prims *p, const ray *r, int i)
+{
+    return p->spheres ? hit_sphere(r, &p->spheres[i]) : hit_box(r, &p->boxes[i]);
+}
+
+/* Closest hit: smallest t, ties to the smallest index. */
+static int closer(float t, int i, float best_t, int best_i)
+{
+    return t < best_t || (t == best_t && t < INFINITY && i < best_i);
+}
+
+static int brute_force(const prims *p, int n, const ray *r, float *t_out)
+{
+    float best_t = INFINITY;
+    int best_i = -1;
+    for (int i = 0; i < n; i++) {
+        float t = hit_prim(p, r, i);
+        if (closer(t, i, best_t, best_i)) {
+            best_t = t;
+            best_i = i;
+        }
+    }
+    *t_out = best_t;
+    return best_i;
+}
+
+/* The traversal the kernels do: nearer child first by the split axis, a stack of far
+ * children, nodes beyond the closest hit so far skipped. *visits counts nodes entered. */
+static int traverse(const bvh *t, const prims *p, const ray *r, float *t_out, long *visits)
+{
+    int stack[BVH_MAX_DEPTH];
+    int top = 0, node = 0, best_i = -1;
+    float best_t = INFINITY;
+    if (t->num_nodes == 0) {
+        *t_out = best_t;
+        return -1;
+    }
+    for (;;) {
+        const cw_bvh_node *nd = &t->nodes[node];
+        float t0, t1;
+        (*visits)++;
+        /* with a tiny relative allowance: sphere hits are not exactly inside their boxes */
+        (void)slab(r, nd->lo, nd->hi, best_t, &t0, &t1);
+        if (t0 <= t1 * (1.0f + 1e-6f)) {
+            if (nd->count > 0) {
+                for (int k = nd->start; k < nd->start + nd->count; k++) {
+                    int i = t->refs[k];
+                    float th = hit_prim(p, r, i);
+                    if (closer(th, i, best_t, best_i)) {
+                        best_t = th;
+                        best_i = i;
+                    }
+                }
+            } else {
+                int first = node + 1, second = nd->start;
+                if (r->d[-nd->count] < 0.0f) {
+                    int s = first;
+                    first = second;
+                    second = s;
+                }
+                assert_true(top < BVH_MAX_DEPTH);
+                stack[top++] = second;
+                node = first;
+                continue;
+            }
+        }
+        if (top == 0)
+            break;
+        node = stack[--top];
+    }
+    *t_out = best_t;
+    return best_i;
+}
+
+/* Traces nrays random rays through a tree over p (n primitives) and by brute force: the
+ * hits must be identical. */
+static void compare_traversal(const prims *p, const bvh_box *boxes, int n, int max_leaf, int nrays,
+                              float ray_lo, float ray_hi, const char *what)
+{
+    bvh t;
+    long visits = 0;
+    int hits = 0;
+    build_ok(&t, boxes, n, max_leaf);
+    check_tree(&t, boxes, n, max_leaf, 1, what);
+    for (int k = 0; k < nrays; k++) {
+        ray r = random_ray(ray_lo, ray_hi);
+        float tb, tt;
+        int ib = brute_force(p, n, &r, &tb);
+        int it = traverse(&t, p, &r, &tt, &visits);
+        if (ib != it || tb != tt)
+            fail_msg("%s: ray %d from (%g %g %g) dir (%g %g %g): tree hits %d at %.9g, brute "
+                     "force %d at %.9g",
+                     what, k, r.o[0], r.o[1], r.o[2], r.d[0], r.d[1], r.d[2], it, tt, ib, tb);
+        hits += ib >= 0;
+    }
+    printf("  %-30s n %6d: %d of %d rays hit, %.1f nodes visited per ray (%d nodes)\n", what, n,
+           hits, nrays, (double)visits / nrays, t.num_nodes);
+    if (n > 0 && hits == 0)
+        fail_msg("%s: no ray hit anything: the test proves nothing", what);
+    bvh_free(&t);
+}
+
+/* Spheres in [0, 10)^3, conservative boxes (padded for rounding, as a renderer must). */
+static void sphere_scene(int n, uint64_t seed, float rmin, float rmax, int max_leaf)
+{
+    sphere *s = malloc((size_t)(n > 0 ? n : 1) * sizeof *s);
+    bvh_box *b = alloc_boxes(n);
+    prims p;
+    char what[64];
+    assert_non_null(s);
+    rng_seed(seed);
+    for (int i = 0; i < n; i++) {
+        for (int a = 0; a < 3; a++)
+            s[i].c[a] = rnd_range(0.0f, 10.0f);
+        s[i].r = rnd_range(rmin, rmax);
+        for (int a = 0; a < 3; a++) {
+            float pad = 1e-5f * (fabsf(s[i].c[a]) + s[i].r);
+            b[i].lo[a] = s[i].c[a] - s[i].r - pad;
+            b[i].hi[a] = s[i].c[a] + s[i].r + pad;
+        }
+    }
+    p.spheres = s;
+    p.boxes = b;
+    snprintf(what, sizeof what, "spheres, seed %d", (int)seed);
+    compare_traversal(&p, b, n, max_leaf, 3000, -2.0f, 12.0f, what);
+    free(s);
+    free(b);
+}
+
+/* ======================================================================================== */
+/* Tests                                                                                    */
+
+static void test_errors(void **state)
+{
+    bvh t;
+    char err[256];
+    bvh_box one;
+    (void)state;
+    set_box(&one, 0, 0, 0, 1, 1, 1);
+    err[0] = '\0';
+    assert_int_equal(bvh_build(&t, &one, -1, 4, err, sizeof err), -1);
+    assert_non_null(strstr(err, "-1 primitives"));
+    assert_null(t.nodes);
+    err[0] = '\0';
+    assert_int_equal(bvh_build(&t, &one, BVH_MAX_PRIMS + 1, 4, err, sizeof err), -1);
+    assert_non_null(strstr(err, "primitives"));
+    err[0] = '\0';
+    assert_int_equal(bvh_build(&t, &one, 1, 0, err, sizeof err), -1);
+    assert_non_null(strstr(err, "leaf size 0"));
+    assert_int_equal(t.num_nodes, 0);
+    bvh_free(&t); /* an empty tree frees */
+}
+
+static void test_empty_and_tiny(void **state)
+{
+    bvh t;
+    bvh_box b[3];
+    (void)state;
+    build_ok(&t, NULL, 0, 4);
+    assert_int_equal(t.num_nodes, 0);
+    assert_int_equal(t.num_refs, 0);
+    assert_int_equal(t.depth, 0);
+    assert_null(t.nodes);
+    assert_null(t.refs);
+    assert_true(bvh_sah_cost(&t) == 0.0);
+    bvh_free(&t);
+
+    set_box(&b[0], 1, 2, 3, 0.5f, 0.25f, 1);
+    build_ok(&t, b, 1, 4);
+    check_tree(&t, b, 1, 4, 1, "one box");
+    assert_int_equal(t.num_nodes, 1);
+    assert_int_equal(t.depth, 1);
+    assert_int_equal(t.nodes[0].start, 0);
+    assert_int_equal(t.nodes[0].count, 1);
+    assert_true(t.nodes[0].lo[0] == 0.5f && t.nodes[0].hi[2] == 4.0f);
+    assert_true(fabs(bvh_sah_cost(&t) - 1.0) < 1e-12);
+    bvh_free(&t);
+
+    /* two far-apart boxes with max_leaf 1: a root and two leaves, split along x */
+    set_box(&b[0], 10, 0, 0, 1, 1, 1);
+    set_box(&b[1], 0, 0, 0, 1, 1, 1);
+    build_ok(&t, b, 2, 1);
+    check_tree(&t, b, 2, 1, 1, "two boxes");
+    assert_int_equal(t.num_nodes, 3);
+    assert_int_equal(t.depth, 2);
+    assert_int_equal(t.nodes[0].count, 0); /* -(axis 0) */
+    assert_int_equal(t.nodes[0].start, 2);
+    assert_int_equal(t.refs[t.nodes[1].start], 1); /* the lower one first */
+    assert_int_equal(t.refs[t.nodes[2].start], 0);
+    /* SAH by hand: root area 2(12*2 + 2*2 + 2*12) = 104, each leaf 24 */
+    assert_true(fabs(bvh_sah_cost(&t) - (1.0 + 2.0 * 24.0 / 104.0)) < 1e-12);
+    bvh_free(&t);
+
+    /* split along z: count is -2 */
+    set_box(&b[0], 0, 0, 10, 1, 1, 1);
+    set_box(&b[1], 0, 0, 0, 1, 1, 1);
+    set_box(&b[2], 0, 0, 20, 1, 1, 1);
+    build_ok(&t, b, 3, 1);
+    check_tree(&t, b, 3, 1, 1, "three boxes on z");
+    assert_int_equal(t.nodes[0].count, -2);
+    bvh_free(&t);
+}
+
+static void test_random_invariants(void **state)
+{
+    static const int sizes[] = {1, 2, 3, 5, 17, 1000, 100000};
+    (void)state;
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+        int n = sizes[k];
+        bvh_box *b = random_boxes(n, 1000 + k, 100.0f, 0.5f + 2.0f * (float)(k % 3));
+        char what[64];
+        snprintf(what, sizeof what, "random, seed %d", (int)(1000 + k));
+        assert_int_equal(build_check(b, n, 4, 1, what), 0);
+        if (n == 1000) {
+            assert_int_equal(build_check(b, n, 1, 1, "random, max_leaf 1"), 0);
+            assert_int_equal(build_check(b, n, 2, 1, "random, max_leaf 2"), 0);
+            assert_int_equal(build_check(b, n, 8, 1, "random, max_leaf 8"), 0);
+            assert_int_equal(build_check(b, n, 100, 1, "random, max_leaf 100"), 0);
+        }
+        free(b);
+    }
+    /* large boxes overlapping everything, and boxes of very different sizes */
+    {
+        int n = 5000;
+        bvh_box *b = random_boxes(n, 77, 10.0f, 20.0f);
+        assert_int_equal(build_check(b, n, 4, 1, "random, overlapping"), 0);
+        rng_seed(78);
+        for (int i = 0; i < n; i++) {
+            float h = powf(10.0f, rnd_range(-4.0f, 2.0f));
+            set_box(&b[i], rnd() * 100, rnd() * 100, rnd() * 100, h, h * rnd(), h);
+        }
+        assert_int_equal(build_check(b, n, 4, 1, "random, sizes 1e-4..1e2"), 0);
+        free(b);
+    }
+}
+
+static void test_degenerate_invariants(void **state)
+{
+    int n = 1000, big;
+    bvh_box *b = alloc_boxes(100000);
+    (void)state;
+
+    /* all identical: leaves up to BVH_COINCIDENT_LEAF, split by count above it */
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 1, 2, 3, 0.5f, 0.5f, 0.5f);
+    big = build_check(b, n, 4, 1, "identical boxes");
+    assert_true(big > 0);
+    big = build_check(b, BVH_COINCIDENT_LEAF, 4, 1, "identical, exactly the cap");
+    assert_int_equal(big, 1);
+    big = build_check(b, 100000, 4, 1, "100000 identical boxes");
+    assert_true(big > 0);
+
+    /* identical centroids, different sizes */
+    rng_seed(5);
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 1, 2, 3, rnd(), rnd(), rnd());
+    build_check(b, n, 4, 1, "same centroid, random sizes");
+
+    /* points (zero-size boxes) on a line: every area is zero */
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], (float)i * 0.1f, 0, 0, 0, 0, 0);
+    assert_int_equal(build_check(b, n, 4, 1, "points on a line"), 0);
+    /* boxes centred on a line, random sizes */
+    rng_seed(6);
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 5.0f, rnd() * 100.0f, 5.0f, rnd(), rnd(), rnd());
+    assert_int_equal(build_check(b, n, 4, 1, "centroids on a line"), 0);
+    /* a line with three positions only, many duplicates */
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 0, 0, (float)(i % 3), 0.1f, 0.1f, 0.1f);
+    build_check(b, n, 4, 1, "three positions");
+    /* one cluster of duplicates and scattered boxes */
+    rng_seed(7);
+    for (int i = 0; i < n; i++) {
+        if (i % 2)
+            set_box(&b[i], 3, 3, 3, 0.1f, 0.1f, 0.1f);
+        else
+            set_box(&b[i], rnd() * 10, rnd() * 10, rnd() * 10, 0.1f, 0.1f, 0.1f);
+    }
+    build_check(b, n, 4, 1, "half duplicates");
+
+    /* huge offset, tiny boxes: 1e6 + [0, 1) */
+    rng_seed(8);
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 1e6f + rnd(), 1e6f + rnd(), -1e6f + rnd(), 1e-3f, 1e-3f, 1e-3f);
+    assert_int_equal(build_check(b, n, 4, 1, "1e6 offset"), 0);
+    /* tiny coordinates */
+    rng_seed(9);
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 1e-30f * rnd(), 1e-30f * rnd(), 1e-30f * rnd(), 1e-33f, 1e-33f, 1e-33f);
+    assert_int_equal(build_check(b, n, 4, 1, "1e-30 coordinates"), 0);
+    /* huge coordinates: areas overflow a float */
+    rng_seed(10);
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 1e30f * rnd(), 1e30f * rnd(), 1e30f * rnd(), 1e27f, 1e27f, 1e27f);
+    assert_int_equal(build_check(b, n, 4, 1, "1e30 coordinates"), 0);
+    /* denormal spread: centroid extents of a few ulps */
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], (float)(i % 7) * 1e-44f, 0, 0, 0, 0, 0);
+    build_check(b, n, 4, 1, "denormal spread");
+
+    /* exponentially spaced: every SAH split peels off the far end, so the depth bound
+     * must force median splits */
+    for (int i = 0; i < 250; i++)
+        set_box(&b[i], ldexpf(1.0f, i / 2), 0, 0, 0.25f, 0.25f, 0.25f);
+    assert_int_equal(build_check(b, 250, 4, 1, "2^(i/2) on a line"), 0);
+    for (int i = 0; i < 20000; i++)
+        set_box(&b[i], powf(1.004f, (float)i), 1, 1, 0.5f, 0.5f, 0.5f);
+    assert_int_equal(build_check(b, 20000, 1, 1, "1.004^i on a line, max_leaf 1"), 0);
+    free(b);
+}
+
+static void test_nonfinite(void **state)
+{
+    int n = 1000;
+    bvh_box *b = random_boxes(n, 11, 10.0f, 0.5f);
+    (void)state;
+    for (int i = 0; i < n; i += 7)
+        b[i].lo[i % 3] = NAN;
+    for (int i = 3; i < n; i += 11)
+        b[i].hi[(i + 1) % 3] = INFINITY;
+    for (int i = 5; i < n; i += 13)
+        b[i].lo[i % 3] = -INFINITY;
+    for (int i = 1; i < n; i += 17)
+        for (int a = 0; a < 3; a++)
+            b[i].lo[a] = b[i].hi[a] = NAN;
+    build_check(b, n, 4, 0, "NaN and inf mixed in");
+    for (int i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++)
+            b[i].lo[a] = b[i].hi[a] = NAN;
+    build_check(b, n, 4, 0, "all NaN");
+    for (int i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++) {
+            b[i].lo[a] = -INFINITY;
+            b[i].hi[a] = INFINITY;
+        }
+    build_check(b, n, 4, 0, "all infinite");
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], (i % 2) ? INFINITY : -INFINITY, (float)i, 0, 0, 0, 0);
+    build_check(b, n, 4, 0, "centroids at +-inf");
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], (float)i * 1e36f, 0, 0, 3e38f, 0, 0); /* lo + hi overflows */
+    build_check(b, n, 4, 0, "overflowing centroids");
+    free(b);
+}
+
+static void test_traversal_spheres(void **state)
+{
+    (void)state;
+    sphere_scene(1, 21, 1.0f, 2.0f, 4);
+    sphere_scene(2, 22, 1.0f, 2.0f, 4);
+    sphere_scene(7, 23, 0.5f, 2.0f, 1);
+    sphere_scene(2000, 24, 0.05f, 0.3f, 4);
+    sphere_scene(2000, 25, 0.2f, 1.5f, 4); /* overlapping */
+    sphere_scene(5000, 26, 0.01f, 0.1f, 1);
+    sphere_scene(5000, 27, 0.01f, 0.1f, 8);
+}
+
+static void test_traversal_boxes(void **state)
+{
+    int n = 3000;
+    bvh_box *b = random_boxes(n, 31, 10.0f, 0.2f);
+    prims p;
+    (void)state;
+    p.spheres = NULL;
+    p.boxes = b;
+    compare_traversal(&p, b, n, 4, 3000, -2.0f, 12.0f, "random boxes");
+    rng_seed(32);
+    for (int i = 0; i < n; i++) /* a few identical stacks: ties broken by index */
+        set_box(&b[i], (float)(i % 5) * 2.0f, 5, 5, 0.5f + 0.001f * (float)(i % 3), 0.5f, 0.5f);
+    compare_traversal(&p, b, n, 4, 3000, -2.0f, 12.0f, "stacks of identical boxes");
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 5, (float)i * 0.01f, 5, 1, 0.004f, 1);
+    compare_traversal(&p, b, n, 4, 3000, -2.0f, 32.0f, "slabs along a line");
+    rng_seed(33);
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], 1e4f + rnd() * 10, 1e4f + rnd() * 10, 1e4f + rnd() * 10, 0.1f, 0.1f, 0.1f);
+    compare_traversal(&p, b, n, 4, 3000, 1e4f - 2.0f, 1e4f + 12.0f, "random boxes at 1e4");
+    free(b);
+}
+
+/* The SAH cost of the tree a plain object-median builder would make (split at the median
+ * centroid along the widest centroid extent, leaves of at most max_leaf), unnormalised. */
+static const bvh_box *median_boxes;
+static int median_axis;
+
+static int median_cmp(const void *pa, const void *pb)
+{
+    const bvh_box *a = &median_boxes[*(const int *)pa], *b = &median_boxes[*(const int *)pb];
+    float ca = a->lo[median_axis] + a->hi[median_axis];
+    float cb = b->lo[median_axis] + b->hi[median_axis];
+    return (ca > cb) - (ca < cb);
+}
+
+static double area_of(const float lo[3], const float hi[3])
+{
+    double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    return 2.0 * (dx * dy + dy * dz + dz * dx);
+}
+
+static double median_cost(int *idx, int n, int max_leaf, double *root_area)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double area;
+    for (int i = 0; i < n; i++) {
+        const bvh_box *b = &median_boxes[idx[i]];
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fminf(lo[a], b->lo[a]);
+            hi[a] = fmaxf(hi[a], b->hi[a]);
+            clo[a] = fminf(clo[a], b->lo[a] + b->hi[a]);
+            chi[a] = fmaxf(chi[a], b->lo[a] + b->hi[a]);
+        }
+    }
+    area = area_of(lo, hi);
+    if (root_area)
+        *root_area = area;
+    if (n <= max_leaf)
+        return area * n;
+    median_axis = 0;
+    for (int a = 1; a < 3; a++)
+        if (chi[a] - clo[a] > chi[median_axis] - clo[median_axis])
+            median_axis = a;
+    qsort(idx, (size_t)n, sizeof *idx, median_cmp);
+    return area + median_cost(idx, n / 2, max_leaf, NULL) +
+           median_cost(idx + n / 2, n - n / 2, max_leaf, NULL);
+}
+
+/* SAH cost of the builder's tree against a single leaf and against an object-median tree:
+ * returns the ratio to the median tree's cost. */
+static double sah_versus_median(const bvh_box *b, int n, const char *what)
+{
+    bvh t;
+    double cost, median, root_area;
+    int *idx = malloc((size_t)n * sizeof *idx);
+    assert_non_null(idx);
+    for (int i = 0; i < n; i++)
+        idx[i] = i;
+    median_boxes = b;
+    median = median_cost(idx, n, 4, &root_area) / root_area;
+    free(idx);
+    build_ok(&t, b, n, 4);
+    check_tree(&t, b, n, 4, 1, what);
+    cost = bvh_sah_cost(&t);
+    printf("  %s, n %d: SAH %.2f; a single leaf %d (ratio %.2e); object-median tree %.2f "
+           "(ratio %.3f); %d nodes, depth %d\n",
+           what, n, cost, n, cost / n, median, cost / median, t.num_nodes, t.depth);
+    /* a good tree costs tens, against n for a single leaf */
+    assert_true(cost / n < 0.01);
+    bvh_free(&t);
+    return cost / median;
+}
+
+static void test_sah_quality(void **state)
+{
+    int n = 50000;
+    bvh_box *b = random_boxes(n, 41, 1.0f, 0.002f);
+    (void)state;
+    /* uniform: the SAH wins by its leaf-or-split choice (measured 0.76) */
+    assert_true(sah_versus_median(b, n, "uniform small boxes") < 0.95);
+    /* clustered, mixed sizes: the SAH wins by far (measured 0.25) */
+    rng_seed(42);
+    for (int i = 0; i < n; i++) {
+        int cl = (int)(rnd() * 20.0f);
+        float cx = (float)(cl % 5) * 20.0f, cy = (float)(cl / 5) * 20.0f, cz = (float)(cl % 3);
+        float h = (i % 50) ? 0.01f : 2.0f;
+        set_box(&b[i], cx + rnd() * rnd() * 5, cy + rnd() * 5, cz * 30.0f + rnd() * 0.5f, h, h, h);
+    }
+    assert_true(sah_versus_median(b, n, "clusters, mixed sizes") < 0.5);
+    free(b);
+}
+
+/* One million random triangles (edges up to about 1% of the scene): the figures. */
+static void test_million_triangles(void **state)
+{
+    int n = 1000000;
+    bvh_box *b = alloc_boxes(n);
+    bvh t;
+    double t0, t1;
+    (void)state;
+    rng_seed(51);
+    for (int i = 0; i < n; i++) {
+        float v[3][3];
+        for (int a = 0; a < 3; a++) {
+            v[0][a] = rnd() * 100.0f;
+            v[1][a] = v[0][a] + rnd_range(-1.0f, 1.0f);
+            v[2][a] = v[0][a] + rnd_range(-1.0f, 1.0f);
+        }
+        for (int a = 0; a < 3; a++) {
+            b[i].lo[a] = fminf(v[0][a], fminf(v[1][a], v[2][a]));
+            b[i].hi[a] = fmaxf(v[0][a], fmaxf(v[1][a], v[2][a]));
+        }
+    }
+    t0 = now_seconds();
+    build_ok(&t, b, n, 4);
+    t1 = now_seconds();
+    printf("  1M random triangles: build %.3f s, %d nodes, depth %d, SAH %.2f\n", t1 - t0,
+           t.num_nodes, t.depth, bvh_sah_cost(&t));
+    check_tree(&t, b, n, 4, 1, "1M triangles");
+    bvh_free(&t);
+    free(b);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_empty_and_tiny),
+        cmocka_unit_test(test_random_invariants),
+        cmocka_unit_test(test_degenerate_invariants),
+        cmocka_unit_test(test_nonfinite),
+        cmocka_unit_test(test_traversal_spheres),
+        cmocka_unit_test(test_traversal_boxes),
+        cmocka_unit_test(test_sah_quality),
+        cmocka_unit_test(test_million_triangles),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
