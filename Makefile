@@ -20,7 +20,7 @@ EXR_CORE   = $(or $(filter -lOpenEXRCore%,$(shell pkg-config --libs OpenEXR 2>/d
 LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson 2>/dev/null) $(EXR_CORE) -lm
 CFLAGS  += $(WARN) $(OPT) $(PKG_CFLAGS)
 
-KERNEL_SRC := kernels/compat.h kernels/types.h kernels/camera.h kernels/intersect.h \
+KERNEL_SRC := kernels/compat.h kernels/types.h kernels/camera.h kernels/intersect.h kernels/bvh.h \
               kernels/shade.h kernels/clwhitted.cl
 LIB_SRC := $(filter-out host/main.c,$(wildcard host/*.c))
 LIB_OBJ := $(patsubst host/%.c,$(BUILD)/%.o,$(LIB_SRC)) $(BUILD)/kernels_src.o

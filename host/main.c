@@ -75,26 +75,6 @@ static double now_seconds(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-/* Says which parts of a scene are parsed but not rendered yet. */
-static void warn_unrendered(const scene *s)
-{
-    size_t i, transmitting = 0;
-    if (s->cones.count)
-        fprintf(stderr,
-                "clwhitted: warning: %zu cone(s)/cylinder(s) are parsed but not rendered yet\n",
-                s->cones.count);
-    for (i = 0; i < s->materials.count; i++) {
-        const scene_material *m = &SCENE_AT(s->materials, scene_material, i);
-        if (m->kt.x > 0 || m->kt.y > 0 || m->kt.z > 0)
-            transmitting++;
-    }
-    if (transmitting)
-        fprintf(stderr,
-                "clwhitted: warning: %zu material(s) with transmission: refraction is not "
-                "rendered yet (treated as opaque)\n",
-                transmitting);
-}
-
 int main(int argc, char **argv)
 {
     enum { OPT_DEVICE = 256, OPT_LIST, OPT_VERSION, OPT_SPP, OPT_PRECISION, OPT_SPD, OPT_STATS };
@@ -217,8 +197,6 @@ int main(int argc, char **argv)
         }
         output = default_out;
     }
-    if (!quiet)
-        warn_unrendered(&s);
     t_load = now_seconds();
     if (renderer_create(&r, device, err, sizeof err) != 0 ||
         renderer_set_settings(r, &settings, err, sizeof err) != 0 ||

@@ -11,6 +11,7 @@
 
 #include <CL/cl.h>
 
+#include "bvh.h"
 #include "clerr.h"
 
 static double seconds_now(void)
@@ -24,14 +25,23 @@ extern const char cw_kernel_source[];
 
 _Static_assert(sizeof(cw_float4) == 16, "cw_float4 must be 16 bytes");
 _Static_assert(sizeof(cw_sphere) == 32, "cw_sphere layout");
-_Static_assert(sizeof(cw_triangle) == 112, "cw_triangle layout");
+_Static_assert(sizeof(cw_triangle) == 64, "cw_triangle layout");
+_Static_assert(sizeof(cw_cone) == 48, "cw_cone layout");
+_Static_assert(sizeof(cw_shadow_ray) == 64, "cw_shadow_ray layout");
 _Static_assert(sizeof(cw_polygon) == 32, "cw_polygon layout");
 _Static_assert(sizeof(cw_material) == 80, "cw_material layout");
 _Static_assert(sizeof(cw_light) == 32, "cw_light layout");
-_Static_assert(sizeof(cw_frame) == 176, "cw_frame layout");
+_Static_assert(sizeof(cw_frame) == 192, "cw_frame layout");
 _Static_assert(sizeof(cw_ray) == 64, "cw_ray layout");
 _Static_assert(sizeof(cw_hit) == 32, "cw_hit layout");
 _Static_assert(sizeof(cw_bvh_node) == 32, "cw_bvh_node layout");
+
+/* What the scene uses, decided once at upload: the kernel features come from it. */
+typedef struct {
+    int spheres, triangles, polygons, cones; /* primitives uploaded (degenerate ones dropped) */
+    int mirrors;                             /* some material has km > 0 */
+    int transmitters;                        /* some material has kt > 0 */
+} scene_features;
 
 struct renderer {
     cl_device_id device;
@@ -40,17 +50,21 @@ struct renderer {
     cl_command_queue queue;
     cl_program program;
     char options[1024]; /* build options of `program` */
-    cl_kernel k_raygen, k_intersect, k_shade;
+    cl_kernel k_raygen, k_intersect, k_shade, k_occlude;
+    cl_ulong max_alloc;  /* CL_DEVICE_MAX_MEM_ALLOC_SIZE */
+    cl_ulong global_mem; /* CL_DEVICE_GLOBAL_MEM_SIZE */
     /* scene buffers */
-    cl_mem frame, spheres, triangles, polygons, verts, lights, materials;
+    cl_mem frame, nodes, refs, spheres, triangles, normals, polygons, verts, cones, lights,
+        materials;
     int have_scene;
     cw_frame host_frame;
-    /* work buffers, grown on demand */
-    cl_mem rays, hits, image, alive;
-    size_t ray_cap, image_cap;
+    /* work buffers, grown on demand: two ray queues (this level's, the next), hits,
+     * shadow rays, the accumulation image (rgb + sample count per pixel), counters */
+    cl_mem rays[2], hits, shadows, image, counters;
+    size_t ray_cap[2], hit_cap, shadow_cap, image_cap;
     /* settings, stats, progress */
     render_settings settings;
-    char base_options[512]; /* the scene's feature options, without the settings' */
+    scene_features features;
     render_stats stats;
     render_progress_fn progress;
     void *progress_ctx;
@@ -259,6 +273,15 @@ int renderer_create(renderer **out, const char *spec, char *err, size_t errlen)
         cl_fail(e, "clGetDeviceInfo(CL_DEVICE_NAME)", r, err, errlen);
         goto out_free;
     }
+    e = clGetDeviceInfo(r->device, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof r->max_alloc, &r->max_alloc,
+                        NULL);
+    if (e == CL_SUCCESS)
+        e = clGetDeviceInfo(r->device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof r->global_mem,
+                            &r->global_mem, NULL);
+    if (e != CL_SUCCESS) {
+        cl_fail(e, "clGetDeviceInfo(memory limits)", r, err, errlen);
+        goto out_free;
+    }
     r->ctx = clCreateContext(NULL, 1, &r->device, NULL, NULL, &e);
     if (e != CL_SUCCESS) {
         cl_fail(e, "clCreateContext", r, err, errlen);
@@ -294,26 +317,45 @@ static void release_mem(cl_mem *m)
 static void release_scene(renderer *r)
 {
     release_mem(&r->frame);
+    release_mem(&r->nodes);
+    release_mem(&r->refs);
     release_mem(&r->spheres);
     release_mem(&r->triangles);
+    release_mem(&r->normals);
     release_mem(&r->polygons);
     release_mem(&r->verts);
+    release_mem(&r->cones);
     release_mem(&r->lights);
     release_mem(&r->materials);
     r->have_scene = 0;
 }
 
+static void release_work(renderer *r)
+{
+    release_mem(&r->rays[0]);
+    release_mem(&r->rays[1]);
+    release_mem(&r->hits);
+    release_mem(&r->shadows);
+    release_mem(&r->image);
+    release_mem(&r->counters);
+    r->ray_cap[0] = r->ray_cap[1] = r->hit_cap = r->shadow_cap = r->image_cap = 0;
+}
+
 static void release_program(renderer *r)
 {
-    if (r->k_raygen)
-        clReleaseKernel(r->k_raygen);
-    if (r->k_intersect)
-        clReleaseKernel(r->k_intersect);
-    if (r->k_shade)
-        clReleaseKernel(r->k_shade);
+    cl_kernel *ks[4];
+    int i;
+    ks[0] = &r->k_raygen;
+    ks[1] = &r->k_intersect;
+    ks[2] = &r->k_shade;
+    ks[3] = &r->k_occlude;
+    for (i = 0; i < 4; i++) {
+        if (*ks[i])
+            clReleaseKernel(*ks[i]);
+        *ks[i] = NULL;
+    }
     if (r->program)
         clReleaseProgram(r->program);
-    r->k_raygen = r->k_intersect = r->k_shade = NULL;
     r->program = NULL;
     r->options[0] = '\0';
 }
@@ -323,10 +365,7 @@ void renderer_destroy(renderer *r)
     if (!r)
         return;
     release_scene(r);
-    release_mem(&r->rays);
-    release_mem(&r->hits);
-    release_mem(&r->image);
-    release_mem(&r->alive);
+    release_work(r);
     release_program(r);
     clReleaseCommandQueue(r->queue);
     clReleaseContext(r->ctx);
@@ -335,32 +374,40 @@ void renderer_destroy(renderer *r)
 
 /* ---- program ---------------------------------------------------------------------- */
 
-static int any_mirror(const scene *s)
+static void find_materials(const scene *s, scene_features *ft)
 {
     size_t i;
+    ft->mirrors = ft->transmitters = 0;
     for (i = 0; i < s->materials.count; i++) {
         const scene_material *m = &SCENE_AT(s->materials, scene_material, i);
         if (m->km.x > 0 || m->km.y > 0 || m->km.z > 0)
-            return 1;
+            ft->mirrors = 1;
+        if (m->kt.x > 0 || m->kt.y > 0 || m->kt.z > 0)
+            ft->transmitters = 1;
     }
-    return 0;
 }
 
-/* The kernel build options for a scene: every feature flag is decided here, from the
- * scene (base) and the settings. CLWHITTED_BUILD_OPTIONS, if set, is appended. */
-static void scene_build_options(const scene *s, int num_polygons, char *buf, size_t n)
+/* The kernel build options for a scene: every feature flag is decided here, from what
+ * the scene uses and its depth (reflection and refraction need depth > 1; SPD counting
+ * turns transmitters into reflectors too). */
+static void scene_build_options(const scene_features *ft, int max_depth, int spd, char *buf,
+                                size_t n)
 {
+    int deep = max_depth > 1;
     snprintf(buf, n,
              "-cl-std=CL1.2 -Werror -DCW_HAS_SPHERES=%d -DCW_HAS_TRIANGLES=%d "
-             "-DCW_HAS_POLYGONS=%d -DCW_HAS_MIRRORS=%d",
-             s->spheres.count > 0, s->triangles.count > 0, num_polygons > 0,
-             any_mirror(s) && s->max_depth > 1);
+             "-DCW_HAS_POLYGONS=%d -DCW_HAS_CONES=%d -DCW_HAS_MIRRORS=%d "
+             "-DCW_HAS_REFRACTION=%d",
+             ft->spheres > 0, ft->triangles > 0, ft->polygons > 0, ft->cones > 0,
+             deep && (ft->mirrors || (spd && ft->transmitters)), deep && ft->transmitters);
 }
 
 static void full_build_options(const renderer *r, char *buf, size_t n)
 {
     const char *extra = getenv("CLWHITTED_BUILD_OPTIONS");
-    snprintf(buf, n, "%s -DCW_FAST=%d -DCW_STATS=%d%s%s%s", r->base_options,
+    char base[512];
+    scene_build_options(&r->features, r->host_frame.max_depth, r->settings.spd, base, sizeof base);
+    snprintf(buf, n, "%s -DCW_FAST=%d -DCW_STATS=%d%s%s%s", base,
              r->settings.precision == RENDER_FAST, r->settings.stats != 0,
              r->settings.precision == RENDER_FAST ? " -cl-fast-relaxed-math" : "", extra ? " " : "",
              extra ? extra : "");
@@ -404,6 +451,8 @@ static int build_program(renderer *r, const char *options, char *err, size_t err
         r->k_intersect = clCreateKernel(r->program, "cw_intersect", &e);
     if (e == CL_SUCCESS)
         r->k_shade = clCreateKernel(r->program, "cw_shade", &e);
+    if (e == CL_SUCCESS)
+        r->k_occlude = clCreateKernel(r->program, "cw_occlude", &e);
     if (e != CL_SUCCESS) {
         cl_fail(e, "clCreateKernel", r, err, errlen);
         release_program(r);
@@ -434,6 +483,20 @@ static cw_float4 f4(vec3f v, float w)
     return r;
 }
 
+/* Checks that a buffer fits the device before asking for it, so that a scene too big
+ * for the device gets a message naming the buffer rather than a driver error. */
+static int check_alloc(const renderer *r, const char *what, size_t bytes, char *err, size_t errlen)
+{
+    if ((cl_ulong)bytes > r->max_alloc) {
+        snprintf(err, errlen,
+                 "the %s buffer needs %zu bytes, more than the %llu bytes that device %s can "
+                 "allocate at once",
+                 what, bytes, (unsigned long long)r->max_alloc, r->device_name);
+        return -1;
+    }
+    return 0;
+}
+
 /* A read-only buffer holding a copy of count elements (at least one element is
  * allocated: OpenCL has no empty buffers). */
 static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t size,
@@ -450,6 +513,15 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
         data = zero;
         count = 1;
     }
+    if (count > ((size_t)-1) / size) {
+        free(zero);
+        snprintf(err, errlen, "the %s buffer size overflows (%zu elements)", what, count);
+        return -1;
+    }
+    if (check_alloc(r, what, count * size, err, errlen) != 0) {
+        free(zero);
+        return -1;
+    }
     *m = clCreateBuffer(r->ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * size, (void *)data,
                         &e);
     free(zero);
@@ -461,34 +533,248 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
     return 0;
 }
 
-static int convert_polygons(const scene *s, cw_polygon **out, int *count, char *err, size_t errlen)
+/* The device arrays of a scene, and the BVH over all its primitives. */
+typedef struct {
+    cw_sphere *sph;
+    cw_triangle *tri;
+    cw_float4 *normals;
+    cw_polygon *pg;
+    cw_float4 *verts;
+    cw_cone *cones;
+    cw_light *lights;
+    cw_material *mats;
+    bvh_box *boxes;
+    int *box_ref; /* box i bounds primitive box_ref[i] (a CW_REF) */
+    int *refs;    /* BVH leaf entries as CW_REFs */
+    int nsph, ntri, nnorm, npg, ncone, nbox;
+    bvh tree;
+} device_scene;
+
+static void device_scene_free(device_scene *ds)
 {
-    size_t i, n = s->polygons.count;
-    int k = 0;
-    cw_polygon *pg = calloc(n ? n : 1, sizeof *pg);
-    if (!pg) {
-        snprintf(err, errlen, "out of memory");
+    free(ds->sph);
+    free(ds->tri);
+    free(ds->normals);
+    free(ds->pg);
+    free(ds->verts);
+    free(ds->cones);
+    free(ds->lights);
+    free(ds->mats);
+    free(ds->boxes);
+    free(ds->box_ref);
+    free(ds->refs);
+    bvh_free(&ds->tree);
+}
+
+static void box_empty(bvh_box *b)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        b->lo[k] = INFINITY;
+        b->hi[k] = -INFINITY;
+    }
+}
+
+static void box_add(bvh_box *b, float x, float y, float z)
+{
+    b->lo[0] = fminf(b->lo[0], x);
+    b->lo[1] = fminf(b->lo[1], y);
+    b->lo[2] = fminf(b->lo[2], z);
+    b->hi[0] = fmaxf(b->hi[0], x);
+    b->hi[1] = fmaxf(b->hi[1], y);
+    b->hi[2] = fmaxf(b->hi[2], z);
+}
+
+/* Box of a disc of radius rad around c, perpendicular to the unit axis a. */
+static void box_add_disc(bvh_box *b, const float c[3], const float a[3], float rad)
+{
+    float e[3];
+    int k;
+    for (k = 0; k < 3; k++)
+        e[k] = rad * sqrtf(fmaxf(0.0f, 1.0f - a[k] * a[k]));
+    box_add(b, c[0] - e[0], c[1] - e[1], c[2] - e[2]);
+    box_add(b, c[0] + e[0], c[1] + e[1], c[2] + e[2]);
+}
+
+/* Widens a box by a relative margin, so that rounding in the kernels' intersection
+ * tests never puts a hit just outside its box. */
+static void box_pad(bvh_box *b)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        float m = 1e-6f * fmaxf(fabsf(b->lo[k]), fabsf(b->hi[k]));
+        b->lo[k] -= m;
+        b->hi[k] += m;
+    }
+}
+
+static int push_box(device_scene *ds, const bvh_box *b, int ref)
+{
+    bvh_box bb = *b;
+    box_pad(&bb);
+    ds->boxes[ds->nbox] = bb;
+    ds->box_ref[ds->nbox] = ref;
+    ds->nbox++;
+    return 0;
+}
+
+static int convert_scene(const scene *s, device_scene *ds, scene_features *ft, char *err,
+                         size_t errlen)
+{
+    size_t i, nprim = s->spheres.count + s->triangles.count + s->polygons.count + s->cones.count;
+    size_t k;
+
+    memset(ds, 0, sizeof *ds);
+    if (nprim > (size_t)1 << 28) {
+        snprintf(err, errlen, "%zu primitives: more than the 2^28 the renderer can address", nprim);
         return -1;
     }
-    for (i = 0; i < n; i++) {
+    ds->sph = calloc(s->spheres.count + 1, sizeof *ds->sph);
+    ds->tri = calloc(s->triangles.count + 1, sizeof *ds->tri);
+    ds->normals = calloc(3 * s->triangles.count + 1, sizeof *ds->normals);
+    ds->pg = calloc(s->polygons.count + 1, sizeof *ds->pg);
+    ds->verts = calloc(s->poly_verts.count + 1, sizeof *ds->verts);
+    ds->cones = calloc(s->cones.count + 1, sizeof *ds->cones);
+    ds->lights = calloc(s->lights.count + 1, sizeof *ds->lights);
+    ds->mats = calloc(s->materials.count + 1, sizeof *ds->mats);
+    ds->boxes = calloc(nprim + 1, sizeof *ds->boxes);
+    ds->box_ref = calloc(nprim + 1, sizeof *ds->box_ref);
+    if (!ds->sph || !ds->tri || !ds->normals || !ds->pg || !ds->verts || !ds->cones ||
+        !ds->lights || !ds->mats || !ds->boxes || !ds->box_ref) {
+        snprintf(err, errlen, "out of memory for a scene of %zu primitives", nprim);
+        return -1;
+    }
+    for (i = 0; i < s->spheres.count; i++) {
+        const scene_sphere *ss = &SCENE_AT(s->spheres, scene_sphere, i);
+        float rad = fabsf(ss->radius);
+        bvh_box b;
+        if (!(rad > 0))
+            continue; /* no surface */
+        ds->sph[ds->nsph].center = f4(ss->center, rad);
+        ds->sph[ds->nsph].material = ss->material;
+        box_empty(&b);
+        box_add(&b, ss->center.x - rad, ss->center.y - rad, ss->center.z - rad);
+        box_add(&b, ss->center.x + rad, ss->center.y + rad, ss->center.z + rad);
+        push_box(ds, &b, CW_REF(CW_PRIM_SPHERE, ds->nsph));
+        ds->nsph++;
+    }
+    for (i = 0; i < s->triangles.count; i++) {
+        const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
+        cw_triangle *t = &ds->tri[ds->ntri];
+        bvh_box b;
+        box_empty(&b);
+        t->p0 = f4(st->p[0], 0);
+        t->p1 = f4(st->p[1], 0);
+        t->p2 = f4(st->p[2], 0);
+        t->material = st->material;
+        t->normals = -1;
+        if (st->has_normals) {
+            t->normals = ds->nnorm;
+            for (k = 0; k < 3; k++)
+                ds->normals[ds->nnorm++] = f4(st->n[k], 0);
+        }
+        for (k = 0; k < 3; k++)
+            box_add(&b, st->p[k].x, st->p[k].y, st->p[k].z);
+        push_box(ds, &b, CW_REF(CW_PRIM_TRIANGLE, ds->ntri));
+        ds->ntri++;
+    }
+    for (i = 0; i < s->poly_verts.count; i++)
+        ds->verts[i] = f4(SCENE_AT(s->poly_verts, vec3f, i), 0);
+    for (i = 0; i < s->polygons.count; i++) {
         const scene_polygon *sp = &SCENE_AT(s->polygons, scene_polygon, i);
         const vec3f *v = &SCENE_AT(s->poly_verts, vec3f, sp->first);
+        cw_polygon *pg = &ds->pg[ds->npg];
         double nn[3], off;
-        int axis;
+        int axis, j;
+        bvh_box b;
         if (scene_polygon_plane(v, sp->count, nn, &off, &axis) != 0)
             continue; /* degenerate: no area, cannot be hit */
-        pg[k].plane.x = (float)nn[0];
-        pg[k].plane.y = (float)nn[1];
-        pg[k].plane.z = (float)nn[2];
-        pg[k].plane.w = (float)off;
-        pg[k].first = sp->first;
-        pg[k].count = sp->count;
-        pg[k].material = sp->material;
-        pg[k].axis = axis;
-        k++;
+        pg->plane.x = (float)nn[0];
+        pg->plane.y = (float)nn[1];
+        pg->plane.z = (float)nn[2];
+        pg->plane.w = (float)off;
+        pg->first = sp->first;
+        pg->count = sp->count;
+        pg->material = sp->material;
+        pg->axis = axis;
+        box_empty(&b);
+        for (j = 0; j < sp->count; j++)
+            box_add(&b, v[j].x, v[j].y, v[j].z);
+        push_box(ds, &b, CW_REF(CW_PRIM_POLYGON, ds->npg));
+        ds->npg++;
     }
-    *out = pg;
-    *count = k;
+    for (i = 0; i < s->cones.count; i++) {
+        const scene_cone *sc = &SCENE_AT(s->cones, scene_cone, i);
+        cw_cone *cn = &ds->cones[ds->ncone];
+        double ax = (double)sc->apex.x - sc->base.x, ay = (double)sc->apex.y - sc->base.y,
+               az = (double)sc->apex.z - sc->base.z;
+        double h = sqrt(ax * ax + ay * ay + az * az);
+        float r0 = fabsf(sc->base_radius), r1 = fabsf(sc->apex_radius);
+        float a[3], c0[3], c1[3];
+        bvh_box b;
+        if (!(h > 0) || !(r0 > 0 || r1 > 0))
+            continue; /* no surface */
+        a[0] = (float)(ax / h);
+        a[1] = (float)(ay / h);
+        a[2] = (float)(az / h);
+        cn->base = f4(sc->base, r0);
+        cn->axis.x = a[0];
+        cn->axis.y = a[1];
+        cn->axis.z = a[2];
+        cn->axis.w = (float)h;
+        cn->apex_radius = r1;
+        cn->material = sc->material;
+        c0[0] = sc->base.x;
+        c0[1] = sc->base.y;
+        c0[2] = sc->base.z;
+        c1[0] = sc->apex.x;
+        c1[1] = sc->apex.y;
+        c1[2] = sc->apex.z;
+        box_empty(&b);
+        box_add_disc(&b, c0, a, r0);
+        box_add_disc(&b, c1, a, r1);
+        push_box(ds, &b, CW_REF(CW_PRIM_CONE, ds->ncone));
+        ds->ncone++;
+    }
+    for (i = 0; i < s->lights.count; i++) {
+        const scene_light *sl = &SCENE_AT(s->lights, scene_light, i);
+        ds->lights[i].position = f4(sl->position, 0);
+        ds->lights[i].intensity = f4(sl->intensity, 0);
+    }
+    for (i = 0; i < s->materials.count; i++) {
+        const scene_material *sm = &SCENE_AT(s->materials, scene_material, i);
+        ds->mats[i].ka = f4(sm->ka, sm->p);
+        ds->mats[i].kd = f4(sm->kd, 0);
+        ds->mats[i].ks = f4(sm->ks, 0);
+        ds->mats[i].km = f4(sm->km, 0);
+        ds->mats[i].kt = f4(sm->kt, sm->ior);
+    }
+    ft->spheres = ds->nsph;
+    ft->triangles = ds->ntri;
+    ft->polygons = ds->npg;
+    ft->cones = ds->ncone;
+    find_materials(s, ft);
+    return 0;
+}
+
+/* Builds the BVH over the primitives' boxes and turns its leaf entries into CW_REFs. */
+static int build_bvh(device_scene *ds, char *err, size_t errlen)
+{
+    int i;
+    if (bvh_build(&ds->tree, ds->boxes, ds->nbox, 4, err, errlen) != 0)
+        return -1;
+    if (ds->tree.num_nodes > 0 && ds->tree.depth > 63) {
+        snprintf(err, errlen, "BVH depth %d exceeds the kernels' traversal stack of 64",
+                 ds->tree.depth);
+        return -1;
+    }
+    ds->refs = malloc(((size_t)ds->tree.num_refs + 1) * sizeof *ds->refs);
+    if (!ds->refs) {
+        snprintf(err, errlen, "out of memory for the BVH");
+        return -1;
+    }
+    for (i = 0; i < ds->tree.num_refs; i++)
+        ds->refs[i] = ds->box_ref[ds->tree.refs[i]];
     return 0;
 }
 
@@ -518,126 +804,84 @@ static void fill_view(cw_frame *f, const scene *s)
 
 int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
 {
-    size_t i;
-    int npoly = 0, rc = -1;
-    cw_sphere *sph = NULL;
-    cw_triangle *tri = NULL;
-    cw_polygon *pg = NULL;
-    cw_float4 *verts = NULL;
-    cw_light *lights = NULL;
-    cw_material *mats = NULL;
+    device_scene ds;
     cw_frame *f = &r->host_frame;
-    double t0, t1;
+    int rc = -1;
+    double t0;
 
     release_scene(r);
     memset(f, 0, sizeof *f);
-    sph = calloc(s->spheres.count + 1, sizeof *sph);
-    tri = calloc(s->triangles.count + 1, sizeof *tri);
-    verts = calloc(s->poly_verts.count + 1, sizeof *verts);
-    lights = calloc(s->lights.count + 1, sizeof *lights);
-    mats = calloc(s->materials.count + 1, sizeof *mats);
-    if (!sph || !tri || !verts || !lights || !mats) {
-        snprintf(err, errlen, "out of memory");
+    r->stats.build_s = r->stats.compile_s = r->stats.upload_s = 0;
+    if (convert_scene(s, &ds, &r->features, err, errlen) != 0)
         goto out_free;
-    }
-    for (i = 0; i < s->spheres.count; i++) {
-        const scene_sphere *ss = &SCENE_AT(s->spheres, scene_sphere, i);
-        sph[i].center = f4(ss->center, ss->radius);
-        sph[i].material = ss->material;
-    }
-    for (i = 0; i < s->triangles.count; i++) {
-        const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
-        tri[i].p0 = f4(st->p[0], 0);
-        tri[i].p1 = f4(st->p[1], 0);
-        tri[i].p2 = f4(st->p[2], 0);
-        tri[i].n0 = f4(st->n[0], 0);
-        tri[i].n1 = f4(st->n[1], 0);
-        tri[i].n2 = f4(st->n[2], 0);
-        tri[i].smooth = st->has_normals;
-        tri[i].material = st->material;
-    }
-    for (i = 0; i < s->poly_verts.count; i++)
-        verts[i] = f4(SCENE_AT(s->poly_verts, vec3f, i), 0);
-    if (convert_polygons(s, &pg, &npoly, err, errlen) != 0)
+    t0 = seconds_now();
+    if (build_bvh(&ds, err, errlen) != 0)
         goto out_free;
-    for (i = 0; i < s->lights.count; i++) {
-        const scene_light *sl = &SCENE_AT(s->lights, scene_light, i);
-        lights[i].position = f4(sl->position, 0);
-        lights[i].intensity = f4(sl->intensity, 0);
-    }
-    for (i = 0; i < s->materials.count; i++) {
-        const scene_material *sm = &SCENE_AT(s->materials, scene_material, i);
-        mats[i].ka = f4(sm->ka, sm->p);
-        mats[i].kd = f4(sm->kd, 0);
-        mats[i].ks = f4(sm->ks, 0);
-        mats[i].km = f4(sm->km, 0);
-        mats[i].kt = f4(sm->kt, sm->ior);
-    }
+    r->stats.build_s = seconds_now() - t0;
 
     fill_view(f, s);
-    f->num_spheres = (int)s->spheres.count;
-    f->num_triangles = (int)s->triangles.count;
-    f->num_polygons = npoly;
+    f->num_spheres = ds.nsph;
+    f->num_triangles = ds.ntri;
+    f->num_polygons = ds.npg;
+    f->num_cones = ds.ncone;
     f->num_lights = (int)s->lights.count;
+    f->num_nodes = ds.tree.num_nodes;
+    f->spd_rays = r->settings.spd;
 
-    scene_build_options(s, npoly, r->base_options, sizeof r->base_options);
-    t0 = seconds_now();
     if (ensure_program(r, err, errlen) != 0)
         goto out_free;
-    t1 = seconds_now();
+    t0 = seconds_now();
     if (upload(r, &r->frame, f, 1, sizeof *f, "frame", err, errlen) ||
-        upload(r, &r->spheres, sph, s->spheres.count, sizeof *sph, "spheres", err, errlen) ||
-        upload(r, &r->triangles, tri, s->triangles.count, sizeof *tri, "triangles", err, errlen) ||
-        upload(r, &r->polygons, pg, (size_t)npoly, sizeof *pg, "polygons", err, errlen) ||
-        upload(r, &r->verts, verts, s->poly_verts.count, sizeof *verts, "polygon vertices", err,
+        upload(r, &r->nodes, ds.tree.nodes, (size_t)ds.tree.num_nodes, sizeof(cw_bvh_node),
+               "BVH nodes", err, errlen) ||
+        upload(r, &r->refs, ds.refs, (size_t)ds.tree.num_refs, sizeof(int), "BVH references", err,
                errlen) ||
-        upload(r, &r->lights, lights, s->lights.count, sizeof *lights, "lights", err, errlen) ||
-        upload(r, &r->materials, mats, s->materials.count, sizeof *mats, "materials", err,
+        upload(r, &r->spheres, ds.sph, (size_t)ds.nsph, sizeof *ds.sph, "spheres", err, errlen) ||
+        upload(r, &r->triangles, ds.tri, (size_t)ds.ntri, sizeof *ds.tri, "triangles", err,
+               errlen) ||
+        upload(r, &r->normals, ds.normals, (size_t)ds.nnorm, sizeof *ds.normals, "vertex normals",
+               err, errlen) ||
+        upload(r, &r->polygons, ds.pg, (size_t)ds.npg, sizeof *ds.pg, "polygons", err, errlen) ||
+        upload(r, &r->verts, ds.verts, s->poly_verts.count, sizeof *ds.verts, "polygon vertices",
+               err, errlen) ||
+        upload(r, &r->cones, ds.cones, (size_t)ds.ncone, sizeof *ds.cones, "cones", err, errlen) ||
+        upload(r, &r->lights, ds.lights, s->lights.count, sizeof *ds.lights, "lights", err,
+               errlen) ||
+        upload(r, &r->materials, ds.mats, s->materials.count, sizeof *ds.mats, "materials", err,
                errlen)) {
         release_scene(r);
         goto out_free;
     }
     r->have_scene = 1;
-    r->stats.upload_s = seconds_now() - t1;
-    (void)t0;
+    r->stats.upload_s = seconds_now() - t0;
     rc = 0;
 out_free:
-    free(sph);
-    free(tri);
-    free(pg);
-    free(verts);
-    free(lights);
-    free(mats);
+    device_scene_free(&ds);
     return rc;
 }
 
 /* ---- passes ----------------------------------------------------------------------- */
 
-/* Makes the work buffers hold n rays and hits and an n-pixel image. */
-static int ensure_work(renderer *r, size_t n, char *err, size_t errlen)
+/* Makes *m a read-write buffer of at least need bytes (contents not kept). */
+static int ensure_buffer(renderer *r, cl_mem *m, size_t *cap, size_t need, const char *what,
+                         char *err, size_t errlen)
 {
     cl_int e;
-    if (!r->alive) {
-        r->alive = clCreateBuffer(r->ctx, CL_MEM_READ_WRITE, sizeof(cl_int), NULL, &e);
-        if (e != CL_SUCCESS)
-            return cl_fail(e, "clCreateBuffer(alive counter)", r, err, errlen);
+    if (*m && *cap >= need)
+        return 0;
+    release_mem(m);
+    *cap = 0;
+    if (need == 0)
+        need = 16;
+    if (check_alloc(r, what, need, err, errlen) != 0)
+        return -1;
+    *m = clCreateBuffer(r->ctx, CL_MEM_READ_WRITE, need, NULL, &e);
+    if (e != CL_SUCCESS) {
+        char call[96];
+        snprintf(call, sizeof call, "clCreateBuffer(%s, %zu bytes)", what, need);
+        return cl_fail(e, call, r, err, errlen);
     }
-    if (n > r->ray_cap) {
-        release_mem(&r->rays);
-        release_mem(&r->hits);
-        release_mem(&r->image);
-        r->ray_cap = 0;
-        r->rays = clCreateBuffer(r->ctx, CL_MEM_READ_WRITE, n * sizeof(cw_ray), NULL, &e);
-        if (e != CL_SUCCESS)
-            return cl_fail(e, "clCreateBuffer(rays)", r, err, errlen);
-        r->hits = clCreateBuffer(r->ctx, CL_MEM_READ_WRITE, n * sizeof(cw_hit), NULL, &e);
-        if (e != CL_SUCCESS)
-            return cl_fail(e, "clCreateBuffer(hits)", r, err, errlen);
-        r->image = clCreateBuffer(r->ctx, CL_MEM_READ_WRITE, n * sizeof(cl_float4), NULL, &e);
-        if (e != CL_SUCCESS)
-            return cl_fail(e, "clCreateBuffer(image)", r, err, errlen);
-        r->ray_cap = n;
-    }
+    *cap = need;
     return 0;
 }
 
@@ -653,24 +897,57 @@ static int set_arg(cl_kernel k, cl_uint i, size_t size, const void *v, const cha
     return 0;
 }
 
-/* Sets the frame and world arguments shared by the intersection and shading kernels:
- * indices 0..4. */
+static int set_mem(cl_kernel k, cl_uint i, cl_mem *m, const char *kname, const renderer *r,
+                   char *err, size_t errlen)
+{
+    return set_arg(k, i, sizeof(cl_mem), m, kname, r, err, errlen);
+}
+
+/* Sets the frame and scene arguments shared by the intersect, shade and occlude kernels:
+ * indices 0..8 (CW_WORLD_ARGS). */
 static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err, size_t errlen)
 {
-    return set_arg(k, 0, sizeof(cl_mem), &r->frame, kname, r, err, errlen) ||
-           set_arg(k, 1, sizeof(cl_mem), &r->spheres, kname, r, err, errlen) ||
-           set_arg(k, 2, sizeof(cl_mem), &r->triangles, kname, r, err, errlen) ||
-           set_arg(k, 3, sizeof(cl_mem), &r->polygons, kname, r, err, errlen) ||
-           set_arg(k, 4, sizeof(cl_mem), &r->verts, kname, r, err, errlen);
+    cl_mem *m[9];
+    cl_uint i;
+    m[0] = &r->frame;
+    m[1] = &r->nodes;
+    m[2] = &r->refs;
+    m[3] = &r->spheres;
+    m[4] = &r->triangles;
+    m[5] = &r->normals;
+    m[6] = &r->polygons;
+    m[7] = &r->verts;
+    m[8] = &r->cones;
+    for (i = 0; i < 9; i++)
+        if (set_mem(k, i, m[i], kname, r, err, errlen))
+            return -1;
+    return 0;
+}
+
+/* The work-group size for kernel k: 64, or less where the device or the kernel allows
+ * less (queried, never assumed). A fixed size also keeps PoCL from specialising (and
+ * compiling) the kernel anew for every global size. */
+static size_t group_size(const renderer *r, cl_kernel k)
+{
+    size_t kmax = 0, g = 64;
+    if (clGetKernelWorkGroupInfo(k, r->device, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax,
+                                 NULL) != CL_SUCCESS ||
+        kmax == 0)
+        kmax = 1;
+    while (g > kmax)
+        g /= 2;
+    return g;
 }
 
 static int launch(renderer *r, cl_kernel k, size_t n, const char *kname, char *err, size_t errlen)
 {
-    size_t global = (n + 63) / 64 * 64;
-    cl_int e = clEnqueueNDRangeKernel(r->queue, k, 1, NULL, &global, NULL, 0, NULL, NULL);
+    size_t local = group_size(r, k);
+    size_t global = (n + local - 1) / local * local;
+    cl_int e = clEnqueueNDRangeKernel(r->queue, k, 1, NULL, &global, &local, 0, NULL, NULL);
     if (e != CL_SUCCESS) {
-        char call[96];
-        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s)", kname);
+        char call[128];
+        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s, %zu work-items in groups of %zu)",
+                 kname, global, local);
         return cl_fail(e, call, r, err, errlen);
     }
     return 0;
@@ -683,55 +960,6 @@ static int need_scene(const renderer *r, char *err, size_t errlen)
         return -1;
     }
     return 0;
-}
-
-/* One eye ray per pixel of rows [row0, row0 + nrows), launched in 2-D (no index division
- * in the kernel); (sx, sy) is the sample's position inside the pixel. Each pixel's
- * accumulated sample count (image .w) goes up by one. */
-static int run_raygen(renderer *r, int row0, int nrows, float sx, float sy, char *err,
-                      size_t errlen)
-{
-    const char *k = "cw_raygen";
-    size_t global[2];
-    cl_int e;
-    cl_int crow0 = row0, cnrows = nrows;
-    global[0] = ((size_t)r->host_frame.nx + 7) / 8 * 8;
-    global[1] = ((size_t)nrows + 7) / 8 * 8;
-    if (set_arg(r->k_raygen, 0, sizeof(cl_mem), &r->frame, k, r, err, errlen) ||
-        set_arg(r->k_raygen, 1, sizeof(cl_mem), &r->rays, k, r, err, errlen) ||
-        set_arg(r->k_raygen, 2, sizeof(cl_mem), &r->image, k, r, err, errlen) ||
-        set_arg(r->k_raygen, 3, sizeof crow0, &crow0, k, r, err, errlen) ||
-        set_arg(r->k_raygen, 4, sizeof cnrows, &cnrows, k, r, err, errlen) ||
-        set_arg(r->k_raygen, 5, sizeof sx, &sx, k, r, err, errlen) ||
-        set_arg(r->k_raygen, 6, sizeof sy, &sy, k, r, err, errlen))
-        return -1;
-    e = clEnqueueNDRangeKernel(r->queue, r->k_raygen, 2, NULL, global, NULL, 0, NULL, NULL);
-    if (e != CL_SUCCESS)
-        return cl_fail(e, "clEnqueueNDRangeKernel(cw_raygen)", r, err, errlen);
-    return 0;
-}
-
-static int run_intersect(renderer *r, cl_int n, char *err, size_t errlen)
-{
-    return set_world_args(r, r->k_intersect, "cw_intersect", err, errlen) ||
-           set_arg(r->k_intersect, 5, sizeof(cl_mem), &r->rays, "cw_intersect", r, err, errlen) ||
-           set_arg(r->k_intersect, 6, sizeof(cl_mem), &r->hits, "cw_intersect", r, err, errlen) ||
-           set_arg(r->k_intersect, 7, sizeof n, &n, "cw_intersect", r, err, errlen) ||
-           launch(r, r->k_intersect, (size_t)n, "cw_intersect", err, errlen);
-}
-
-static int run_shade(renderer *r, cl_int n, char *err, size_t errlen)
-{
-    const char *k = "cw_shade";
-    return set_world_args(r, r->k_shade, k, err, errlen) ||
-           set_arg(r->k_shade, 5, sizeof(cl_mem), &r->lights, k, r, err, errlen) ||
-           set_arg(r->k_shade, 6, sizeof(cl_mem), &r->materials, k, r, err, errlen) ||
-           set_arg(r->k_shade, 7, sizeof(cl_mem), &r->rays, k, r, err, errlen) ||
-           set_arg(r->k_shade, 8, sizeof(cl_mem), &r->hits, k, r, err, errlen) ||
-           set_arg(r->k_shade, 9, sizeof(cl_mem), &r->image, k, r, err, errlen) ||
-           set_arg(r->k_shade, 10, sizeof(cl_mem), &r->alive, k, r, err, errlen) ||
-           set_arg(r->k_shade, 11, sizeof n, &n, k, r, err, errlen) ||
-           launch(r, r->k_shade, (size_t)n, k, err, errlen);
 }
 
 static int fill_zero(renderer *r, cl_mem m, size_t size, const char *what, char *err, size_t errlen)
@@ -758,6 +986,106 @@ static int read_buffer(renderer *r, cl_mem m, size_t size, void *dst, const char
     return 0;
 }
 
+/* The accumulation image (nx * ny pixels of rgb + sample count) and the counters. */
+static int ensure_image(renderer *r, char *err, size_t errlen)
+{
+    size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
+    return ensure_buffer(r, &r->image, &r->image_cap, n * 4 * sizeof(cl_float), "image", err,
+                         errlen) ||
+           ensure_buffer(r, &r->counters, &(size_t){0}, CW_NUM_COUNTERS * sizeof(cl_int),
+                         "counters", err, errlen);
+}
+
+static int clear_accumulation(renderer *r, char *err, size_t errlen)
+{
+    size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
+    return ensure_image(r, err, errlen) ||
+           fill_zero(r, r->image, n * 4 * sizeof(cl_float), "image", err, errlen);
+}
+
+/* Rows per band: a band's ray queues, hits and shadow rays stay within about 64 MB. */
+static int band_rows(const renderer *r)
+{
+    size_t per_ray = 2 * sizeof(cw_ray) + sizeof(cw_hit) +
+                     (size_t)(r->host_frame.num_lights + 1) * sizeof(cw_shadow_ray);
+    size_t rays = ((size_t)64 << 20) / per_ray;
+    size_t rows = rays / (size_t)r->host_frame.nx;
+    if (rows < 1)
+        rows = 1;
+    if (rows > (size_t)r->host_frame.ny)
+        rows = (size_t)r->host_frame.ny;
+    return (int)rows;
+}
+
+/* One eye ray per pixel of rows [row0, row0 + nrows), launched in 2-D (no index division
+ * in the kernel); (sx, sy) is the sample's position inside the pixel. */
+static int run_raygen(renderer *r, int row0, int nrows, float sx, float sy, char *err,
+                      size_t errlen)
+{
+    const char *k = "cw_raygen";
+    size_t global[2], local[2];
+    cl_int e, crow0 = row0, cnrows = nrows;
+    size_t n = (size_t)r->host_frame.nx * (size_t)nrows;
+    if (ensure_buffer(r, &r->rays[0], &r->ray_cap[0], n * sizeof(cw_ray), "ray queue", err, errlen))
+        return -1;
+    local[1] = 1;
+    local[0] = group_size(r, r->k_raygen);
+    global[0] = ((size_t)r->host_frame.nx + local[0] - 1) / local[0] * local[0];
+    global[1] = (size_t)nrows;
+    if (set_mem(r->k_raygen, 0, &r->frame, k, r, err, errlen) ||
+        set_mem(r->k_raygen, 1, &r->rays[0], k, r, err, errlen) ||
+        set_mem(r->k_raygen, 2, &r->image, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 3, sizeof crow0, &crow0, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 4, sizeof cnrows, &cnrows, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 5, sizeof sx, &sx, k, r, err, errlen) ||
+        set_arg(r->k_raygen, 6, sizeof sy, &sy, k, r, err, errlen))
+        return -1;
+    e = clEnqueueNDRangeKernel(r->queue, r->k_raygen, 2, NULL, global, local, 0, NULL, NULL);
+    if (e != CL_SUCCESS)
+        return cl_fail(e, "clEnqueueNDRangeKernel(cw_raygen)", r, err, errlen);
+    return 0;
+}
+
+static int run_intersect(renderer *r, cl_mem *rays, cl_int n, char *err, size_t errlen)
+{
+    const char *k = "cw_intersect";
+    if (ensure_buffer(r, &r->hits, &r->hit_cap, (size_t)n * sizeof(cw_hit), "hits", err, errlen))
+        return -1;
+    return set_world_args(r, r->k_intersect, k, err, errlen) ||
+           set_mem(r->k_intersect, 9, rays, k, r, err, errlen) ||
+           set_mem(r->k_intersect, 10, &r->hits, k, r, err, errlen) ||
+           set_mem(r->k_intersect, 11, &r->counters, k, r, err, errlen) ||
+           set_arg(r->k_intersect, 12, sizeof n, &n, k, r, err, errlen) ||
+           launch(r, r->k_intersect, (size_t)n, k, err, errlen);
+}
+
+static int run_shade(renderer *r, cl_mem *rays, cl_mem *out, cl_int n, char *err, size_t errlen)
+{
+    const char *k = "cw_shade";
+    return set_world_args(r, r->k_shade, k, err, errlen) ||
+           set_mem(r->k_shade, 9, &r->lights, k, r, err, errlen) ||
+           set_mem(r->k_shade, 10, &r->materials, k, r, err, errlen) ||
+           set_mem(r->k_shade, 11, rays, k, r, err, errlen) ||
+           set_mem(r->k_shade, 12, &r->hits, k, r, err, errlen) ||
+           set_mem(r->k_shade, 13, &r->image, k, r, err, errlen) ||
+           set_mem(r->k_shade, 14, out, k, r, err, errlen) ||
+           set_mem(r->k_shade, 15, &r->shadows, k, r, err, errlen) ||
+           set_mem(r->k_shade, 16, &r->counters, k, r, err, errlen) ||
+           set_arg(r->k_shade, 17, sizeof n, &n, k, r, err, errlen) ||
+           launch(r, r->k_shade, (size_t)n, k, err, errlen);
+}
+
+static int run_occlude(renderer *r, cl_int n, char *err, size_t errlen)
+{
+    const char *k = "cw_occlude";
+    return set_world_args(r, r->k_occlude, k, err, errlen) ||
+           set_mem(r->k_occlude, 9, &r->shadows, k, r, err, errlen) ||
+           set_mem(r->k_occlude, 10, &r->image, k, r, err, errlen) ||
+           set_mem(r->k_occlude, 11, &r->counters, k, r, err, errlen) ||
+           set_arg(r->k_occlude, 12, sizeof n, &n, k, r, err, errlen) ||
+           launch(r, r->k_occlude, (size_t)n, k, err, errlen);
+}
+
 /* The position of sample k (mod spp) inside its pixel: a ceil(sqrt(spp)) x rows grid of
  * cell centres, taken row by row. spp = 1: the pixel centre. */
 static void sample_position(int spp, int k, float *sx, float *sy)
@@ -773,45 +1101,68 @@ static void sample_position(int spp, int k, float *sx, float *sy)
     *sy = ((float)(k / gx) + 0.5f) / (float)gy;
 }
 
-static int clear_accumulation(renderer *r, char *err, size_t errlen)
+static unsigned long long total_rays(const render_stats *st)
 {
-    size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    return ensure_work(r, n, err, errlen) ||
-           fill_zero(r, r->image, n * sizeof(cl_float4), "image", err, errlen);
+    return st->eye_rays + st->shadow_rays + st->secondary_rays;
 }
 
-/* Traces one sample for a band of rows: ray generation, then per depth one intersection
- * and one shading pass. progress: report after each pass, with the fraction done before
- * this band (done) and the band's share (share). */
+/* Traces one sample for a band of rows: ray generation, then per level one intersect,
+ * one shade and one occlude launch, the next level's rays going to the other queue.
+ * The only wait per level is the read of the queue counters. progress: reported after
+ * each level, with the fraction done before this band (done) and the band's share. */
 static int trace_band(renderer *r, int sample, int row0, int nrows, double done, double share,
                       char *err, size_t errlen)
 {
-    size_t n = (size_t)r->host_frame.nx * (size_t)nrows;
+    cl_int n = (cl_int)((size_t)r->host_frame.nx * (size_t)nrows);
+    int cur = 0, depth, branch = r->features.transmitters ? 2 : 1;
+    size_t lights = (size_t)(r->host_frame.num_lights > 0 ? r->host_frame.num_lights : 1);
     float sx, sy;
-    int depth;
 
     sample_position(r->settings.spp, sample, &sx, &sy);
-    if (run_raygen(r, row0, nrows, sx, sy, err, errlen))
+    if (ensure_image(r, err, errlen) || run_raygen(r, row0, nrows, sx, sy, err, errlen))
         return -1;
-    r->stats.eye_rays += n;
-    for (depth = 1; depth <= r->host_frame.max_depth; depth++) {
-        cl_int alive = 0;
-        if (fill_zero(r, r->alive, sizeof(cl_int), "alive counter", err, errlen) ||
-            run_intersect(r, (cl_int)n, err, errlen) || run_shade(r, (cl_int)n, err, errlen) ||
-            read_buffer(r, r->alive, sizeof alive, &alive, "alive counter", err, errlen))
+    r->stats.eye_rays += (unsigned long long)n;
+    for (depth = 1; depth <= r->host_frame.max_depth && n > 0; depth++) {
+        cl_int counts[CW_NUM_COUNTERS];
+        int nxt = 1 - cur;
+        if (ensure_buffer(r, &r->rays[nxt], &r->ray_cap[nxt],
+                          (size_t)n * (size_t)branch * sizeof(cw_ray), "ray queue", err, errlen) ||
+            ensure_buffer(r, &r->shadows, &r->shadow_cap,
+                          (size_t)n * lights * sizeof(cw_shadow_ray), "shadow ray queue", err,
+                          errlen) ||
+            fill_zero(r, r->counters, CW_NUM_COUNTERS * sizeof(cl_int), "counters", err, errlen) ||
+            run_intersect(r, &r->rays[cur], n, err, errlen) ||
+            run_shade(r, &r->rays[cur], &r->rays[nxt], n, err, errlen) ||
+            read_buffer(r, r->counters, sizeof counts, counts, "counters", err, errlen))
+            return -1;
+        if (counts[CW_COUNT_SHADOWS] > 0 && run_occlude(r, counts[CW_COUNT_SHADOWS], err, errlen))
             return -1;
         r->stats.passes++;
-        if (depth < r->host_frame.max_depth)
-            r->stats.secondary_rays += (unsigned long long)alive;
+        r->stats.shadow_rays += (unsigned long long)counts[CW_COUNT_SHADOWS];
+        r->stats.secondary_rays += (unsigned long long)counts[CW_COUNT_RAYS];
+        if (r->settings.stats) {
+            /* the occlude kernel's count is read with the next level's counters; wait
+             * for it here so that each level's figures are complete */
+            cl_int blocked = 0;
+            cl_int e = clFinish(r->queue);
+            if (e != CL_SUCCESS)
+                return cl_fail(e, "clFinish", r, err, errlen);
+            if (read_buffer(r, r->counters, sizeof counts, counts, "counters", err, errlen))
+                return -1;
+            blocked = counts[CW_COUNT_BLOCKED];
+            r->stats.eye_hits += (unsigned long long)counts[CW_COUNT_EYE_HITS];
+            r->stats.secondary_hits += (unsigned long long)counts[CW_COUNT_SECONDARY_HITS];
+            r->stats.shadow_blocked += (unsigned long long)blocked;
+        }
+        n = counts[CW_COUNT_RAYS];
+        cur = nxt;
         if (r->progress &&
             r->progress(r->progress_ctx,
-                        done + share * (alive == 0 ? 1.0 : (double)depth / r->host_frame.max_depth),
-                        r->stats.eye_rays + r->stats.secondary_rays) != 0) {
+                        done + share * (n == 0 ? 1.0 : (double)depth / r->host_frame.max_depth),
+                        total_rays(&r->stats)) != 0) {
             snprintf(err, errlen, "render cancelled");
             return -1;
         }
-        if (alive == 0)
-            break;
     }
     return 0;
 }
@@ -825,89 +1176,154 @@ int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size
                  sample, row0, row0 + nrows - 1, r->host_frame.ny);
         return -1;
     }
-    if (ensure_work(r, (size_t)r->host_frame.nx * (size_t)r->host_frame.ny, err, errlen))
-        return -1;
     return trace_band(r, sample, row0, nrows, 0.0, 1.0, err, errlen);
+}
+
+/* Reads the accumulation image back as nx * ny rgb + count floats. */
+static float *read_accumulation(renderer *r, char *err, size_t errlen)
+{
+    size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
+    float *px;
+    if (ensure_image(r, err, errlen))
+        return NULL;
+    px = malloc(n * 4 * sizeof *px);
+    if (!px) {
+        snprintf(err, errlen, "out of memory for a %zu-pixel image", n);
+        return NULL;
+    }
+    if (read_buffer(r, r->image, n * 4 * sizeof *px, px, "image", err, errlen)) {
+        free(px);
+        return NULL;
+    }
+    return px;
 }
 
 int renderer_read(renderer *r, image *img, char *err, size_t errlen)
 {
     size_t n, i;
-    cl_float4 *px = NULL;
+    float *px;
 
     if (need_scene(r, err, errlen))
         return -1;
+    px = read_accumulation(r, err, errlen);
+    if (!px)
+        return -1;
     n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    if (ensure_work(r, n, err, errlen))
-        return -1;
-    px = malloc(n * sizeof *px);
-    if (!px) {
-        snprintf(err, errlen, "out of memory for a %zu-pixel image", n);
-        return -1;
-    }
-    if (read_buffer(r, r->image, n * sizeof *px, px, "image", err, errlen))
-        goto out_free;
     if (image_alloc(img, r->host_frame.nx, r->host_frame.ny) != 0) {
         snprintf(err, errlen, "out of memory for a %zu-pixel image", n);
-        goto out_free;
+        free(px);
+        return -1;
     }
     for (i = 0; i < n; i++) {
-        float w = px[i].s[3] > 0 ? 1.0f / px[i].s[3] : 0.0f;
-        img->rgb[3 * i + 0] = px[i].s[0] * w;
-        img->rgb[3 * i + 1] = px[i].s[1] * w;
-        img->rgb[3 * i + 2] = px[i].s[2] * w;
+        float w = px[4 * i + 3] > 0 ? 1.0f / px[4 * i + 3] : 0.0f;
+        img->rgb[3 * i + 0] = px[4 * i + 0] * w;
+        img->rgb[3 * i + 1] = px[4 * i + 1] * w;
+        img->rgb[3 * i + 2] = px[4 * i + 2] * w;
     }
     free(px);
     return 0;
-out_free:
+}
+
+static int write_frame(renderer *r, char *err, size_t errlen)
+{
+    cl_int e = clEnqueueWriteBuffer(r->queue, r->frame, CL_TRUE, 0, sizeof r->host_frame,
+                                    &r->host_frame, 0, NULL, NULL);
+    if (e != CL_SUCCESS)
+        return cl_fail(e, "clEnqueueWriteBuffer(frame)", r, err, errlen);
+    return 0;
+}
+
+/* Every sample of every band into the (cleared) accumulation image. */
+static int trace_all(renderer *r, int spp, char *err, size_t errlen)
+{
+    int k, row0, rows = band_rows(r), ny = r->host_frame.ny;
+    if (clear_accumulation(r, err, errlen))
+        return -1;
+    for (k = 0; k < spp; k++)
+        for (row0 = 0; row0 < ny; row0 += rows) {
+            int nr = row0 + rows > ny ? ny - row0 : rows;
+            double done = ((double)k + (double)row0 / ny) / spp;
+            if (trace_band(r, k, row0, nr, done, (double)nr / ny / spp, err, errlen))
+                return -1;
+        }
+    return 0;
+}
+
+/* The SPD procedure: rays through the (nx+1) x (ny+1) pixel corners, the four corners of
+ * each pixel averaged. The corners are the centres of an (nx+1) x (ny+1) image whose
+ * window is half a pixel wider on every side. */
+static int render_spd(renderer *r, image *img, char *err, size_t errlen)
+{
+    cw_frame saved = r->host_frame;
+    cw_frame *f = &r->host_frame;
+    float pu = (saved.window.y - saved.window.x) / (float)saved.nx;
+    float pv = (saved.window.w - saved.window.z) / (float)saved.ny;
+    float *px = NULL;
+    int i, j, rc = -1, cx = saved.nx + 1;
+
+    f->nx = saved.nx + 1;
+    f->ny = saved.ny + 1;
+    f->window.x = saved.window.x - 0.5f * pu;
+    f->window.y = saved.window.y + 0.5f * pu;
+    f->window.z = saved.window.z - 0.5f * pv;
+    f->window.w = saved.window.w + 0.5f * pv;
+    if (write_frame(r, err, errlen) || trace_all(r, 1, err, errlen))
+        goto out_restore;
+    px = read_accumulation(r, err, errlen);
+    if (!px)
+        goto out_restore;
+    if (image_alloc(img, saved.nx, saved.ny) != 0) {
+        snprintf(err, errlen, "out of memory for a %dx%d image", saved.nx, saved.ny);
+        goto out_restore;
+    }
+    for (j = 0; j < saved.ny; j++)
+        for (i = 0; i < saved.nx; i++) {
+            const float *c00 = &px[4 * (j * cx + i)], *c01 = &px[4 * (j * cx + i + 1)];
+            const float *c10 = &px[4 * ((j + 1) * cx + i)], *c11 = &px[4 * ((j + 1) * cx + i + 1)];
+            int c;
+            for (c = 0; c < 3; c++)
+                img->rgb[3 * (j * saved.nx + i) + c] = 0.25f * (c00[c] + c01[c] + c10[c] + c11[c]);
+        }
+    rc = 0;
+out_restore:
     free(px);
-    return -1;
+    r->host_frame = saved;
+    if (write_frame(r, err, errlen) != 0)
+        rc = -1;
+    return rc;
 }
 
 int renderer_render(renderer *r, image *img, char *err, size_t errlen)
 {
-    int k, spp = r->settings.spp < 1 ? 1 : r->settings.spp;
+    int spp = r->settings.spp < 1 ? 1 : r->settings.spp, rc;
     double t0;
 
     if (need_scene(r, err, errlen) || ensure_program(r, err, errlen))
         return -1;
-    if (r->settings.spd) {
-        snprintf(err, errlen, "SPD mode is not implemented yet");
-        return -1;
-    }
     t0 = seconds_now();
     r->stats.eye_rays = r->stats.eye_hits = 0;
     r->stats.shadow_rays = r->stats.shadow_blocked = 0;
     r->stats.secondary_rays = r->stats.secondary_hits = 0;
     r->stats.passes = 0;
-    if (clear_accumulation(r, err, errlen))
-        return -1;
-    for (k = 0; k < spp; k++)
-        if (trace_band(r, k, 0, r->host_frame.ny, (double)k / spp, 1.0 / spp, err, errlen))
-            return -1;
-    if (renderer_read(r, img, err, errlen))
-        return -1;
+    if (r->settings.spd)
+        rc = render_spd(r, img, err, errlen);
+    else
+        rc = trace_all(r, spp, err, errlen) || renderer_read(r, img, err, errlen) ? -1 : 0;
     r->stats.trace_s = seconds_now() - t0;
-    return 0;
+    return rc;
 }
 
 int renderer_set_view(renderer *r, const scene *s, char *err, size_t errlen)
 {
-    cw_frame *f = &r->host_frame;
-    cl_int e;
     if (need_scene(r, err, errlen))
         return -1;
-    if (s->width < 1 || s->height < 1) {
-        snprintf(err, errlen, "renderer_set_view: bad image size %dx%d", s->width, s->height);
+    if (s->width < 1 || s->height < 1 || s->max_depth < 1) {
+        snprintf(err, errlen, "renderer_set_view: bad image size %dx%d or depth %d", s->width,
+                 s->height, s->max_depth);
         return -1;
     }
-    fill_view(f, s);
-    /* the mirror feature depends on the depth */
-    scene_build_options(s, f->num_polygons, r->base_options, sizeof r->base_options);
-    e = clEnqueueWriteBuffer(r->queue, r->frame, CL_TRUE, 0, sizeof *f, f, 0, NULL, NULL);
-    if (e != CL_SUCCESS)
-        return cl_fail(e, "clEnqueueWriteBuffer(frame)", r, err, errlen);
-    return clear_accumulation(r, err, errlen);
+    fill_view(&r->host_frame, s);
+    return write_frame(r, err, errlen) || clear_accumulation(r, err, errlen);
 }
 
 void render_settings_default(render_settings *st)
@@ -928,6 +1344,10 @@ int renderer_set_settings(renderer *r, const render_settings *st, char *err, siz
         return -1;
     }
     r->settings = *st;
+    if (r->have_scene && r->host_frame.spd_rays != (st->spd != 0)) {
+        r->host_frame.spd_rays = st->spd != 0;
+        return write_frame(r, err, errlen);
+    }
     return 0;
 }
 
@@ -945,14 +1365,12 @@ void renderer_set_progress(renderer *r, render_progress_fn fn, void *ctx)
 int renderer_generate_rays(renderer *r, cw_ray *rays, char *err, size_t errlen)
 {
     size_t n;
-    if (need_scene(r, err, errlen))
-        return -1;
-    if (ensure_program(r, err, errlen))
+    if (need_scene(r, err, errlen) || ensure_program(r, err, errlen))
         return -1;
     n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    if (ensure_work(r, n, err, errlen) ||
+    if (ensure_image(r, err, errlen) ||
         run_raygen(r, 0, r->host_frame.ny, 0.5f, 0.5f, err, errlen) ||
-        read_buffer(r, r->rays, n * sizeof *rays, rays, "rays", err, errlen))
+        read_buffer(r, r->rays[0], n * sizeof *rays, rays, "rays", err, errlen))
         return -1;
     return 0;
 }
@@ -967,13 +1385,15 @@ int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, cha
         snprintf(err, errlen, "renderer_intersect: no rays");
         return -1;
     }
-    if (ensure_work(r, (size_t)n, err, errlen))
+    if (ensure_image(r, err, errlen) ||
+        ensure_buffer(r, &r->rays[0], &r->ray_cap[0], (size_t)n * sizeof *rays, "ray queue", err,
+                      errlen))
         return -1;
-    e = clEnqueueWriteBuffer(r->queue, r->rays, CL_TRUE, 0, (size_t)n * sizeof *rays, rays, 0, NULL,
-                             NULL);
+    e = clEnqueueWriteBuffer(r->queue, r->rays[0], CL_TRUE, 0, (size_t)n * sizeof *rays, rays, 0,
+                             NULL, NULL);
     if (e != CL_SUCCESS)
         return cl_fail(e, "clEnqueueWriteBuffer(rays)", r, err, errlen);
-    if (run_intersect(r, n, err, errlen) ||
+    if (run_intersect(r, &r->rays[0], n, err, errlen) ||
         read_buffer(r, r->hits, (size_t)n * sizeof *hits, hits, "hits", err, errlen))
         return -1;
     return 0;

@@ -31,8 +31,8 @@ typedef struct {
 typedef struct {
     vec3f ka, kd, ks, km; /* ambient, diffuse, specular, mirror: RGB */
     float p;              /* Phong exponent */
-    vec3f kt;             /* transmission (parsed; not rendered yet) */
-    float ior;            /* index of refraction (parsed; not rendered yet) */
+    vec3f kt;             /* transmission: weight of the refracted ray */
+    float ior;            /* index of refraction */
 } scene_material;
 
 typedef struct {
@@ -85,7 +85,7 @@ typedef struct {
     scene_array triangles;  /* scene_triangle */
     scene_array polygons;   /* scene_polygon */
     scene_array poly_verts; /* vec3f */
-    scene_array cones;      /* scene_cone: parsed, not rendered yet */
+    scene_array cones;      /* scene_cone: open cones and cylinders */
 } scene;
 
 #define SCENE_AT(arr, type, i) (((type *)(arr).data)[i])

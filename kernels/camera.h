@@ -34,8 +34,8 @@ CW_INLINE cw_ray cam_ray(CW_GLOBAL const cw_frame *f, int i, int j, float sx, fl
     ray.weight = v4_from3(v3(1.0f, 1.0f, 1.0f), 0.0f);
     ray.pixel = (f->ny - 1 - j) * f->nx + i;
     ray.depth = 1;
+    ray.skip = 0;
     ray.pad0 = 0;
-    ray.pad1 = 0;
     return ray;
 }
 

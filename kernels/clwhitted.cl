@@ -1,51 +1,85 @@
-/* Thin entry kernels: index, bounds check, one call into the domain headers. */
+/* Thin entry kernels: index, bounds check, one call into the domain headers.
+ * Wavefront: raygen fills the ray queue; per level, intersect finds each queued ray's
+ * closest hit, shade adds ambient/background to the pixel and appends shadow rays and
+ * the next level's rays, and occlude adds each unblocked shadow ray's light. */
+#include "bvh.h"
 #include "camera.h"
 #include "intersect.h"
 #include "shade.h"
 #include "types.h"
 
-#if (CW_HAS_SPHERES | CW_HAS_TRIANGLES | CW_HAS_POLYGONS | CW_HAS_MIRRORS) & ~1
-#error "feature flags CW_HAS_* must be 0 or 1"
+#if (CW_HAS_SPHERES | CW_HAS_TRIANGLES | CW_HAS_POLYGONS | CW_HAS_CONES | CW_HAS_MIRRORS |         \
+     CW_HAS_REFRACTION | CW_FAST | CW_STATS) &                                                     \
+    ~1
+#error "feature flags CW_HAS_*, CW_FAST and CW_STATS must be 0 or 1"
+#endif
+#if CW_FAST && !defined(__FAST_RELAXED_MATH__)
+#error "CW_FAST=1 is built with -cl-fast-relaxed-math"
+#endif
+#if !CW_FAST && defined(__FAST_RELAXED_MATH__)
+#error "the robust path (CW_FAST=0) must not be built with -cl-fast-relaxed-math"
 #endif
 
 #define CW_WORLD_ARGS                                                                              \
-    __global const cw_sphere *spheres, __global const cw_triangle *triangles,                      \
-        __global const cw_polygon *polygons, __global const float4 *poly_verts
+    __global const cw_frame *f, __global const cw_bvh_node *nodes, __global const int *refs,       \
+        __global const cw_sphere *spheres, __global const cw_triangle *triangles,                  \
+        __global const float4 *normals, __global const cw_polygon *polygons,                       \
+        __global const float4 *poly_verts, __global const cw_cone *cones
 
-static cw_world make_world(__global const cw_frame *f, __global const cw_sphere *spheres,
-                           __global const cw_triangle *triangles,
-                           __global const cw_polygon *polygons, __global const float4 *poly_verts)
-{
-    cw_world w;
-    w.spheres = spheres;
-    w.triangles = triangles;
-    w.polygons = polygons;
-    w.poly_verts = poly_verts;
-    w.num_spheres = f->num_spheres;
-    w.num_triangles = f->num_triangles;
-    w.num_polygons = f->num_polygons;
-    return w;
-}
+#define CW_MAKE_WORLD(w)                                                                           \
+    do {                                                                                           \
+        (w).spheres = spheres;                                                                     \
+        (w).triangles = triangles;                                                                 \
+        (w).normals = normals;                                                                     \
+        (w).polygons = polygons;                                                                   \
+        (w).poly_verts = poly_verts;                                                               \
+        (w).cones = cones;                                                                         \
+        (w).nodes = nodes;                                                                         \
+        (w).refs = refs;                                                                           \
+        (w).num_nodes = f->num_nodes;                                                              \
+    } while (0)
 
 /* 2-D launch over a band of rows: x = column, y = row within the band (image row 0 at
  * the top). Ray k of the band is pixel (x, row0 + y); the pixel's sample count (.w of
  * the accumulation image) goes up by one. */
-__kernel void cw_raygen(__global const cw_frame *f, __global cw_ray *rays, __global float4 *image,
+__kernel void cw_raygen(__global const cw_frame *f, __global cw_ray *rays, __global float *image,
                         int row0, int nrows, float sx, float sy)
 {
     int x = (int)get_global_id(0);
     int y = (int)get_global_id(1);
-    int row = row0 + y;
     cw_ray ray;
     if (x >= f->nx || y >= nrows)
         return;
-    ray = cam_ray(f, x, f->ny - 1 - row, sx, sy);
+    ray = cam_ray(f, x, f->ny - 1 - (row0 + y), sx, sy);
     rays[y * f->nx + x] = ray;
-    image[ray.pixel].w += 1.0f;
+    image[4 * ray.pixel + 3] += 1.0f;
 }
 
-__kernel void cw_intersect(__global const cw_frame *f, CW_WORLD_ARGS, __global const cw_ray *rays,
-                           __global cw_hit *hits, int n)
+__kernel void cw_intersect(CW_WORLD_ARGS, __global const cw_ray *rays, __global cw_hit *hits,
+                           __global int *counters, int n)
+{
+    int gid = (int)get_global_id(0);
+    cw_world w;
+    cw_ray ray;
+    cw_hit hit;
+    if (gid >= n)
+        return;
+    ray = rays[gid];
+    CW_MAKE_WORLD(w);
+    hit = bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, INFINITY, ray.skip);
+    hits[gid] = hit;
+#if CW_STATS
+    if (hit.kind != CW_PRIM_NONE)
+        atomic_inc(&counters[ray.depth == 1 ? CW_COUNT_EYE_HITS : CW_COUNT_SECONDARY_HITS]);
+#else
+    (void)counters;
+#endif
+}
+
+__kernel void cw_shade(CW_WORLD_ARGS, __global const cw_light *lights,
+                       __global const cw_material *materials, __global const cw_ray *rays,
+                       __global const cw_hit *hits, __global float *image, __global cw_ray *out,
+                       __global cw_shadow_ray *shadows, __global int *counters, int n)
 {
     int gid = (int)get_global_id(0);
     cw_world w;
@@ -53,35 +87,26 @@ __kernel void cw_intersect(__global const cw_frame *f, CW_WORLD_ARGS, __global c
     if (gid >= n)
         return;
     ray = rays[gid];
-    if (ray.pixel < 0)
-        return;
-    w = make_world(f, spheres, triangles, polygons, poly_verts);
-    hits[gid] = isect_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, INFINITY);
+    CW_MAKE_WORLD(w);
+    shade_ray(&w, f, lights, materials, &ray, hits[gid], image, out, shadows, counters);
 }
 
-/* Adds each ray's shading to its pixel and leaves the next level's ray in its place;
- * counts the rays that go on. One ray per pixel per level, so no two work-items write
- * the same pixel. */
-__kernel void cw_shade(__global const cw_frame *f, CW_WORLD_ARGS, __global const cw_light *lights,
-                       __global const cw_material *materials, __global cw_ray *rays,
-                       __global const cw_hit *hits, __global float4 *image, __global int *alive,
-                       int n)
+__kernel void cw_occlude(CW_WORLD_ARGS, __global const cw_shadow_ray *shadows,
+                         __global float *image, __global int *counters, int n)
 {
     int gid = (int)get_global_id(0);
     cw_world w;
-    cw_ray ray;
-    int pixel;
-    float3 c;
+    cw_shadow_ray sr;
     if (gid >= n)
         return;
-    ray = rays[gid];
-    pixel = ray.pixel;
-    if (pixel < 0)
+    sr = shadows[gid];
+    CW_MAKE_WORLD(w);
+    if (bvh_any(&w, sr.origin.xyz, sr.dir.xyz, 0.0f, sr.origin.w, sr.skip)) {
+#if CW_STATS
+        atomic_inc(&counters[CW_COUNT_BLOCKED]);
+#endif
         return;
-    w = make_world(f, spheres, triangles, polygons, poly_verts);
-    c = shade_ray(&w, f, lights, materials, &ray, hits[gid]);
-    image[pixel] += (float4)(c, 0.0f);
-    rays[gid] = ray;
-    if (ray.pixel >= 0)
-        atomic_inc(alive);
+    }
+    shade_add(image, sr.pixel, sr.color.xyz);
+    (void)counters;
 }

@@ -14,23 +14,77 @@
 typedef float4 cw_float4;
 typedef float3 vec3;
 
-CW_INLINE vec3 v3(float x, float y, float z) { return (float3)(x, y, z); }
-CW_INLINE vec3 v3_from4(cw_float4 a) { return a.xyz; }
-CW_INLINE cw_float4 v4_from3(vec3 a, float w) { return (float4)(a, w); }
-CW_INLINE vec3 v3_add(vec3 a, vec3 b) { return a + b; }
-CW_INLINE vec3 v3_sub(vec3 a, vec3 b) { return a - b; }
-CW_INLINE vec3 v3_mul(vec3 a, vec3 b) { return a * b; }
-CW_INLINE vec3 v3_scale(vec3 a, float s) { return a * s; }
-CW_INLINE float v3_dot(vec3 a, vec3 b) { return dot(a, b); }
-CW_INLINE vec3 v3_cross(vec3 a, vec3 b) { return cross(a, b); }
-CW_INLINE float v3_len(vec3 a) { return length(a); }
-CW_INLINE vec3 v3_norm(vec3 a) { return normalize(a); }
+CW_INLINE vec3 v3(float x, float y, float z)
+{
+    return (float3)(x, y, z);
+}
+CW_INLINE vec3 v3_from4(cw_float4 a)
+{
+    return a.xyz;
+}
+CW_INLINE cw_float4 v4_from3(vec3 a, float w)
+{
+    return (float4)(a, w);
+}
+CW_INLINE vec3 v3_add(vec3 a, vec3 b)
+{
+    return a + b;
+}
+CW_INLINE vec3 v3_sub(vec3 a, vec3 b)
+{
+    return a - b;
+}
+CW_INLINE vec3 v3_mul(vec3 a, vec3 b)
+{
+    return a * b;
+}
+CW_INLINE vec3 v3_scale(vec3 a, float s)
+{
+    return a * s;
+}
+CW_INLINE float v3_dot(vec3 a, vec3 b)
+{
+    return dot(a, b);
+}
+CW_INLINE vec3 v3_cross(vec3 a, vec3 b)
+{
+    return cross(a, b);
+}
+CW_INLINE float v3_len(vec3 a)
+{
+    return length(a);
+}
+CW_INLINE vec3 v3_norm(vec3 a)
+{
+    return normalize(a);
+}
 #define cw_sqrt(x) sqrt(x)
 #define cw_fabs(x) fabs(x)
 #define cw_fmax(a, b) fmax((a), (b))
 #define cw_fmin(a, b) fmin((a), (b))
 #define cw_pow(a, b) pow((a), (b))
 #define cw_atomic_inc(p) atomic_inc(p)
+#define cw_nextafter(a, b) nextafter((a), (b))
+#define cw_copysign(a, b) copysign((a), (b))
+#define CW_INFINITY INFINITY
+
+/* The robust path relies on a*b - c*d being computed the same way for both triangles of
+ * a shared edge: no fused multiply-add contraction. */
+#pragma OPENCL FP_CONTRACT OFF
+
+/* Atomic float add through compare-and-swap on the bits (OpenCL 1.2 has no float
+ * atomics). */
+CW_INLINE void cw_atomic_add(volatile __global float *p, float v)
+{
+    union {
+        unsigned int u;
+        float f;
+    } old, upd;
+    do {
+        old.f = *p;
+        upd.f = old.f + v;
+    } while (atomic_cmpxchg((volatile __global unsigned int *)p, old.u, upd.u) != old.u);
+}
 
 #else /* host C99 */
 
@@ -57,7 +111,10 @@ CW_INLINE vec3 v3(float x, float y, float z)
     r.z = z;
     return r;
 }
-CW_INLINE vec3 v3_from4(cw_float4 a) { return v3(a.x, a.y, a.z); }
+CW_INLINE vec3 v3_from4(cw_float4 a)
+{
+    return v3(a.x, a.y, a.z);
+}
 CW_INLINE cw_float4 v4_from3(vec3 a, float w)
 {
     cw_float4 r;
@@ -67,23 +124,51 @@ CW_INLINE cw_float4 v4_from3(vec3 a, float w)
     r.w = w;
     return r;
 }
-CW_INLINE vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
-CW_INLINE vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-CW_INLINE vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }
-CW_INLINE vec3 v3_scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
-CW_INLINE float v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+CW_INLINE vec3 v3_add(vec3 a, vec3 b)
+{
+    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+CW_INLINE vec3 v3_sub(vec3 a, vec3 b)
+{
+    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+CW_INLINE vec3 v3_mul(vec3 a, vec3 b)
+{
+    return v3(a.x * b.x, a.y * b.y, a.z * b.z);
+}
+CW_INLINE vec3 v3_scale(vec3 a, float s)
+{
+    return v3(a.x * s, a.y * s, a.z * s);
+}
+CW_INLINE float v3_dot(vec3 a, vec3 b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 CW_INLINE vec3 v3_cross(vec3 a, vec3 b)
 {
     return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
-CW_INLINE float v3_len(vec3 a) { return sqrtf(v3_dot(a, a)); }
-CW_INLINE vec3 v3_norm(vec3 a) { return v3_scale(a, 1.0f / v3_len(a)); }
+CW_INLINE float v3_len(vec3 a)
+{
+    return sqrtf(v3_dot(a, a));
+}
+CW_INLINE vec3 v3_norm(vec3 a)
+{
+    return v3_scale(a, 1.0f / v3_len(a));
+}
 #define cw_sqrt(x) sqrtf(x)
 #define cw_fabs(x) fabsf(x)
 #define cw_fmax(a, b) fmaxf((a), (b))
 #define cw_fmin(a, b) fminf((a), (b))
 #define cw_pow(a, b) powf((a), (b))
 #define cw_atomic_inc(p) ((*(p))++)
+#define cw_nextafter(a, b) nextafterf((a), (b))
+#define cw_copysign(a, b) copysignf((a), (b))
+#define CW_INFINITY INFINITY
+CW_INLINE void cw_atomic_add(float *p, float v)
+{
+    *p += v;
+}
 
 #endif
 

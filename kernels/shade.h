@@ -1,6 +1,7 @@
-/* shade_: Blinn-Phong shading with shadow rays and ideal mirror reflection
- * (Shirley & Marschner 4.5-4.8), one ray-tree level per call: the host loops over
- * the depths, so there is no recursion. */
+/* shade_: Blinn-Phong shading, shadow rays, ideal mirror reflection and Snell refraction
+ * (Shirley & Marschner 4.5-4.8, 13.1), one ray-tree level at a time: shading a ray adds
+ * its ambient term to the pixel and appends a shadow ray per light and the next level's
+ * reflection and refraction rays to queues. No recursion. */
 #ifndef CW_SHADE_H
 #define CW_SHADE_H
 
@@ -10,20 +11,127 @@
 #ifndef CW_HAS_MIRRORS
 #define CW_HAS_MIRRORS 1
 #endif
+#ifndef CW_HAS_REFRACTION
+#define CW_HAS_REFRACTION 1
+#endif
 
-/* Unit geometric normal at a hit (not yet turned towards the ray). */
-CW_INLINE vec3 shade_geometric_normal(const cw_world *w, cw_hit hit, vec3 p)
+/* gamma(n) of Higham (n u / (1 - n u), u = 2^-24), doubled: OpenCL allows a few ulps of
+ * error in division and sqrt where IEEE rounds correctly. */
+#define CW_GAMMA(n) ((float)(n)*1.19209304e-7f)
+
+/* Where a ray hit: the point, its unit geometric normal (as the primitive defines it,
+ * not turned to the ray), the unit shading normal, and a bound on the point's
+ * absolute error per coordinate. */
+typedef struct {
+    vec3 p, ng, ns, err;
+    int flat; /* 1 + reference of the primitive if it is flat (triangle, polygon), else 0 */
+} cw_surface;
+
+CW_INLINE vec3 shade_abs(vec3 a)
 {
+    return v3(cw_fabs(a.x), cw_fabs(a.y), cw_fabs(a.z));
+}
+
+/* The hit point, recomputed from the primitive where that is more accurate than
+ * o + t d: from the barycentric coordinates on triangles, and projected back onto
+ * spheres, cones and polygon planes (pbrt, 3rd ed., 3.9). */
+CW_INLINE cw_surface shade_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d)
+{
+    cw_surface s;
+    vec3 p = v3_add(o, v3_scale(d, hit.t));
+    s.flat = 0;
     if (hit.kind == CW_PRIM_SPHERE) {
-        CW_GLOBAL const cw_sphere *s = &w->spheres[hit.index];
-        return v3_norm(v3_sub(p, v3_from4(s->center)));
-    }
-    if (hit.kind == CW_PRIM_TRIANGLE) {
+        CW_GLOBAL const cw_sphere *sp = &w->spheres[hit.index];
+        vec3 c = v3_from4(sp->center);
+        vec3 n = v3_norm(v3_sub(p, c));
+        s.ng = n;
+#if !CW_FAST
+        p = v3_add(c, v3_scale(n, sp->center.w));
+        s.err = v3_scale(v3_add(shade_abs(c), shade_abs(p)), CW_GAMMA(6));
+#endif
+    } else if (hit.kind == CW_PRIM_TRIANGLE) {
         CW_GLOBAL const cw_triangle *t = &w->triangles[hit.index];
-        vec3 p0 = v3_from4(t->p0);
-        return v3_norm(v3_cross(v3_sub(v3_from4(t->p1), p0), v3_sub(v3_from4(t->p2), p0)));
+        vec3 p0 = v3_from4(t->p0), p1 = v3_from4(t->p1), p2 = v3_from4(t->p2);
+        float b0 = 1.0f - hit.u - hit.v;
+        s.ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+        s.flat = CW_REF(CW_PRIM_TRIANGLE, hit.index) + 1;
+#if !CW_FAST
+        {
+            vec3 q0 = v3_scale(p0, b0), q1 = v3_scale(p1, hit.u), q2 = v3_scale(p2, hit.v);
+            p = v3_add(q0, v3_add(q1, q2));
+            s.err =
+                v3_scale(v3_add(shade_abs(q0), v3_add(shade_abs(q1), shade_abs(q2))), CW_GAMMA(7));
+        }
+#endif
+        if (t->normals >= 0) {
+            vec3 sn = v3_add(v3_scale(v3_from4(w->normals[t->normals]), b0),
+                             v3_add(v3_scale(v3_from4(w->normals[t->normals + 1]), hit.u),
+                                    v3_scale(v3_from4(w->normals[t->normals + 2]), hit.v)));
+            float len = v3_len(sn);
+            s.ns = len > 0.0f ? v3_scale(sn, 1.0f / len) : s.ng;
+        } else {
+            s.ns = s.ng;
+        }
+    } else if (hit.kind == CW_PRIM_POLYGON) {
+        CW_GLOBAL const cw_polygon *pg = &w->polygons[hit.index];
+        vec3 n = v3_from4(pg->plane);
+        s.ng = n;
+        s.flat = CW_REF(CW_PRIM_POLYGON, hit.index) + 1;
+#if !CW_FAST
+        p = v3_sub(p, v3_scale(n, v3_dot(n, p) - pg->plane.w));
+        s.err = v3_scale(v3_add(shade_abs(p), v3(cw_fabs(pg->plane.w), cw_fabs(pg->plane.w),
+                                                 cw_fabs(pg->plane.w))),
+                         CW_GAMMA(8));
+#endif
+    } else {
+        CW_GLOBAL const cw_cone *cn = &w->cones[hit.index];
+        vec3 ax = v3_from4(cn->axis), b = v3_from4(cn->base);
+        float k = (cn->apex_radius - cn->base.w) / cn->axis.w;
+        vec3 pb = v3_sub(p, b);
+        float h = cw_fmin(cw_fmax(v3_dot(pb, ax), 0.0f), cn->axis.w);
+        vec3 radial = v3_sub(pb, v3_scale(ax, h));
+        float rl = v3_len(radial);
+        vec3 ru = rl > 0.0f ? v3_scale(radial, 1.0f / rl) : v3(0.0f, 0.0f, 0.0f);
+        s.ng = v3_norm(v3_sub(ru, v3_scale(ax, k)));
+#if !CW_FAST
+        p = v3_add(b, v3_add(v3_scale(ax, h), v3_scale(ru, cn->base.w + k * h)));
+        s.err = v3_scale(v3_add(shade_abs(b), shade_abs(p)), CW_GAMMA(8));
+#endif
     }
-    return v3_from4(w->polygons[hit.index].plane);
+    if (hit.kind != CW_PRIM_TRIANGLE)
+        s.ns = s.ng;
+#if CW_FAST
+    s.err = v3(0.0f, 0.0f, 0.0f);
+    s.flat = 0;
+#endif
+    s.p = p;
+    return s;
+}
+
+/* The origin of a ray leaving the surface in direction dir: the point moved along the
+ * geometric normal, to dir's side, past its error bound, then one more ulp away per
+ * coordinate (pbrt, 3rd ed., 3.9.5), so the new ray starts on the right side of the
+ * surface at any scene scale. The fast path moves it by a plain 1e-4. */
+CW_INLINE vec3 shade_spawn(const cw_surface *s, vec3 dir)
+{
+    vec3 ng = v3_dot(dir, s->ng) < 0.0f ? v3_scale(s->ng, -1.0f) : s->ng;
+#if CW_FAST
+    return v3_add(s->p, v3_scale(ng, 1e-4f));
+#else
+    float dist = v3_dot(shade_abs(ng), s->err);
+    vec3 off = v3_scale(ng, dist);
+    vec3 po = v3_add(s->p, off);
+    po.x = off.x > 0.0f   ? cw_nextafter(po.x, CW_INFINITY)
+           : off.x < 0.0f ? cw_nextafter(po.x, -CW_INFINITY)
+                          : po.x;
+    po.y = off.y > 0.0f   ? cw_nextafter(po.y, CW_INFINITY)
+           : off.y < 0.0f ? cw_nextafter(po.y, -CW_INFINITY)
+                          : po.y;
+    po.z = off.z > 0.0f   ? cw_nextafter(po.z, CW_INFINITY)
+           : off.z < 0.0f ? cw_nextafter(po.z, -CW_INFINITY)
+                          : po.z;
+    return po;
+#endif
 }
 
 CW_INLINE int shade_material(const cw_world *w, cw_hit hit)
@@ -32,61 +140,81 @@ CW_INLINE int shade_material(const cw_world *w, cw_hit hit)
         return w->spheres[hit.index].material;
     if (hit.kind == CW_PRIM_TRIANGLE)
         return w->triangles[hit.index].material;
-    return w->polygons[hit.index].material;
+    if (hit.kind == CW_PRIM_POLYGON)
+        return w->polygons[hit.index].material;
+    return w->cones[hit.index].material;
 }
 
-/* The distance by which secondary rays leave a surface: relative to the size of the
- * hit point's coordinates, so that it scales with the scene. */
-CW_INLINE float shade_offset(vec3 p)
+/* Adds c to pixel's rgb; several rays of one pixel may do it at once. */
+CW_INLINE void shade_add(CW_GLOBAL float *image, int pixel, vec3 c)
 {
-    float m = cw_fmax(cw_fmax(cw_fabs(p.x), cw_fabs(p.y)), cw_fmax(cw_fabs(p.z), 1.0f));
-    return 1e-4f * m;
+    if (c.x != 0.0f)
+        cw_atomic_add(&image[4 * pixel + 0], c.x);
+    if (c.y != 0.0f)
+        cw_atomic_add(&image[4 * pixel + 1], c.y);
+    if (c.z != 0.0f)
+        cw_atomic_add(&image[4 * pixel + 2], c.z);
 }
 
-/* Shades *ray at hit: returns what it adds to its pixel and turns *ray into the mirror
- * ray of the next level, or ends it (pixel = -1). A miss returns the background. */
-CW_INLINE vec3 shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
+CW_INLINE int shade_nonzero(vec3 c)
+{
+    return c.x > 0.0f || c.y > 0.0f || c.z > 0.0f;
+}
+
+CW_INLINE void shade_push_ray(CW_GLOBAL cw_ray *out, CW_GLOBAL int *counters, vec3 o, vec3 d,
+                              vec3 weight, const cw_ray *parent, int skip)
+{
+    int slot = cw_atomic_inc(&counters[CW_COUNT_RAYS]);
+    cw_ray r;
+    r.origin = v4_from3(o, 0.0f);
+    r.dir = v4_from3(d, 0.0f);
+    r.weight = v4_from3(weight, 0.0f);
+    r.pixel = parent->pixel;
+    r.depth = parent->depth + 1;
+    r.skip = skip;
+    r.pad0 = 0;
+    out[slot] = r;
+}
+
+/* Shades *ray at hit (see the file comment). A miss adds the background. */
+CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
                          CW_GLOBAL const cw_light *lights, CW_GLOBAL const cw_material *materials,
-                         cw_ray *ray, cw_hit hit)
+                         const cw_ray *ray, cw_hit hit, CW_GLOBAL float *image,
+                         CW_GLOBAL cw_ray *out, CW_GLOBAL cw_shadow_ray *shadows,
+                         CW_GLOBAL int *counters)
 {
     vec3 weight = v3_from4(ray->weight);
-    vec3 o = v3_from4(ray->origin);
     vec3 d = v3_from4(ray->dir);
-    vec3 p, ng, n, color, ka, kd, ks;
-    float phong, eps;
+    vec3 n, ka, kd, ks, km, kt;
+    float phong;
     int k;
+    cw_surface s;
     CW_GLOBAL const cw_material *m;
 
     if (hit.kind == CW_PRIM_NONE) {
-        ray->pixel = -1;
-        return v3_mul(weight, v3_from4(f->background));
+        shade_add(image, ray->pixel, v3_mul(weight, v3_from4(f->background)));
+        return;
     }
-    p = v3_add(o, v3_scale(d, hit.t));
-    ng = shade_geometric_normal(w, hit, p);
-    if (v3_dot(ng, d) > 0.0f) /* two-sided: use the side facing the ray */
-        ng = v3_scale(ng, -1.0f);
-    n = ng;
-    if (hit.kind == CW_PRIM_TRIANGLE && w->triangles[hit.index].smooth) {
-        CW_GLOBAL const cw_triangle *t = &w->triangles[hit.index];
-        vec3 sn = v3_add(v3_scale(v3_from4(t->n0), 1.0f - hit.u - hit.v),
-                         v3_add(v3_scale(v3_from4(t->n1), hit.u), v3_scale(v3_from4(t->n2), hit.v)));
-        n = v3_norm(sn);
-        if (v3_dot(n, d) > 0.0f)
-            n = v3_scale(n, -1.0f);
-    }
+    s = shade_surface(w, hit, v3_from4(ray->origin), d);
+    /* two-sided: shade the side facing the ray */
+    n = v3_dot(s.ns, d) > 0.0f ? v3_scale(s.ns, -1.0f) : s.ns;
     m = &materials[shade_material(w, hit)];
     ka = v3_from4(m->ka);
     kd = v3_from4(m->kd);
     ks = v3_from4(m->ks);
+    km = v3_from4(m->km);
+    kt = v3_from4(m->kt);
     phong = m->ka.w;
-    eps = shade_offset(p);
 
-    color = v3_mul(ka, v3_from4(f->ambient));
+    shade_add(image, ray->pixel, v3_mul(weight, v3_mul(ka, v3_from4(f->ambient))));
     for (k = 0; k < f->num_lights; k++) {
-        vec3 to_light = v3_sub(v3_from4(lights[k].position), p);
+        vec3 lp = v3_from4(lights[k].position);
+        vec3 to_light = v3_sub(lp, s.p);
         float dist = v3_len(to_light);
-        vec3 l, h, intensity;
+        vec3 l, h, c, o;
         float ndl, ndh;
+        int slot;
+        cw_shadow_ray sr;
 
         if (!(dist > 0.0f))
             continue;
@@ -94,29 +222,56 @@ CW_INLINE vec3 shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
         ndl = v3_dot(n, l);
         if (ndl <= 0.0f) /* facing away: no contribution and no shadow ray */
             continue;
-        if (isect_any(w, v3_add(p, v3_scale(ng, eps)), l, 0.0f, dist - eps))
-            continue;
-        intensity = v3_from4(lights[k].intensity);
         h = v3_norm(v3_sub(l, d));
         ndh = cw_fmax(0.0f, v3_dot(n, h));
-        color = v3_add(color, v3_mul(v3_add(v3_scale(kd, ndl), v3_scale(ks, cw_pow(ndh, phong))),
-                                     intensity));
+        c = v3_mul(v3_add(v3_scale(kd, ndl), v3_scale(ks, cw_pow(ndh, phong))),
+                   v3_mul(weight, v3_from4(lights[k].intensity)));
+        o = shade_spawn(&s, l);
+        slot = cw_atomic_inc(&counters[CW_COUNT_SHADOWS]);
+        sr.origin = v4_from3(o, v3_len(v3_sub(lp, o)));
+        sr.dir = v4_from3(l, 0.0f);
+        sr.color = v4_from3(c, 0.0f);
+        sr.pixel = ray->pixel;
+        sr.skip = s.flat;
+        sr.pad0 = sr.pad1 = 0;
+        shadows[slot] = sr;
     }
-    color = v3_mul(weight, color);
 
-#if CW_HAS_MIRRORS
-    vec3 km = v3_from4(m->km);
-    if (ray->depth < f->max_depth && (km.x > 0.0f || km.y > 0.0f || km.z > 0.0f)) {
-        vec3 r = v3_sub(d, v3_scale(n, 2.0f * v3_dot(d, n)));
-        ray->origin = v4_from3(v3_add(p, v3_scale(ng, eps)), 0.0f);
-        ray->dir = v4_from3(v3_norm(r), 0.0f);
-        ray->weight = v4_from3(v3_mul(weight, km), 0.0f);
-        ray->depth += 1;
-        return color;
+    if (ray->depth >= f->max_depth)
+        return;
+#if CW_HAS_MIRRORS || CW_HAS_REFRACTION
+    {
+        vec3 refl_weight = km;
+        int reflect = shade_nonzero(km);
+#if CW_HAS_REFRACTION
+        if (shade_nonzero(kt)) {
+            /* inside or outside from the geometric normal's side; shading stays two-sided */
+            int entering = v3_dot(d, s.ng) < 0.0f;
+            float ior = m->kt.w > 0.0f ? m->kt.w : 1.0f;
+            float eta = entering ? 1.0f / ior : ior;
+            float cosi = -v3_dot(d, n);
+            float k2 = 1.0f - eta * eta * (1.0f - cosi * cosi);
+            if (f->spd_rays)
+                reflect = 1;
+            if (k2 < 0.0f) { /* total internal reflection: the transmitted share reflects */
+                refl_weight = v3_add(refl_weight, kt);
+                reflect = 1;
+            } else {
+                vec3 td = v3_norm(v3_add(v3_scale(d, eta), v3_scale(n, eta * cosi - cw_sqrt(k2))));
+                shade_push_ray(out, counters, shade_spawn(&s, td), td, v3_mul(weight, kt), ray,
+                               s.flat);
+            }
+        }
+#endif
+        if (reflect) {
+            vec3 r = v3_norm(v3_sub(d, v3_scale(n, 2.0f * v3_dot(d, n))));
+            shade_push_ray(out, counters, shade_spawn(&s, r), r, v3_mul(weight, refl_weight), ray,
+                           s.flat);
+        }
     }
 #endif
-    ray->pixel = -1;
-    return color;
+    (void)km;
+    (void)kt;
 }
 
 #endif

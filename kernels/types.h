@@ -6,11 +6,16 @@
 
 #include "compat.h"
 
-/* primitive kinds, as stored in cw_hit.kind */
+/* primitive kinds, as stored in cw_hit.kind and in the low two bits of a primitive
+ * reference (ref = index * 4 + kind - 1) */
 #define CW_PRIM_NONE 0
 #define CW_PRIM_SPHERE 1
 #define CW_PRIM_TRIANGLE 2
 #define CW_PRIM_POLYGON 3
+#define CW_PRIM_CONE 4
+#define CW_REF(kind, index) ((index)*4 + (kind)-1)
+#define CW_REF_KIND(ref) (((ref)&3) + 1)
+#define CW_REF_INDEX(ref) ((ref) >> 2)
 
 /* camera projections, as stored in cw_frame.projection */
 #define CW_PROJ_PERSPECTIVE 0
@@ -25,18 +30,27 @@ typedef struct {
 
 typedef struct {
     cw_float4 p0, p1, p2; /* vertices (w unused) */
-    cw_float4 n0, n1, n2; /* vertex normals, used when smooth != 0 */
     int material;
-    int smooth;
+    int normals; /* smooth triangles: index of the first of three vertex normals in the
+                  * normal array; -1: flat */
     int pad0, pad1;
 } cw_triangle;
+
+/* An open cone or cylinder (no caps) between a base and an apex disc. */
+typedef struct {
+    cw_float4 base; /* xyz: centre of the base disc, w: its radius */
+    cw_float4 axis; /* xyz: unit vector from base to apex, w: height |apex - base| */
+    float apex_radius;
+    int material;
+    int pad0, pad1;
+} cw_cone;
 
 typedef struct {
     cw_float4 plane; /* xyz: unit normal (counter-clockwise front), w: offset d, n.x = d */
     int first;       /* index of the first vertex in the polygon vertex array */
     int count;       /* number of vertices */
     int material;
-    int axis;        /* dominant axis of the normal, dropped for the 2-D inside test */
+    int axis; /* dominant axis of the normal, dropped for the 2-D inside test */
 } cw_polygon;
 
 /* One node of the flattened bounding volume hierarchy (depth-first order: an interior
@@ -54,7 +68,7 @@ typedef struct {
     cw_float4 kd; /* rgb diffuse */
     cw_float4 ks; /* rgb specular */
     cw_float4 km; /* rgb mirror */
-    cw_float4 kt; /* rgb transmission (not rendered yet), w: index of refraction */
+    cw_float4 kt; /* rgb transmission (refraction weight), w: index of refraction */
 } cw_material;
 
 typedef struct {
@@ -65,34 +79,57 @@ typedef struct {
 /* Everything a pass needs to know besides the primitive arrays. */
 typedef struct {
     cw_float4 eye;
-    cw_float4 u, v, w;     /* orthonormal viewing basis */
-    cw_float4 dir;         /* oblique projection: common ray direction */
-    cw_float4 window;      /* image-plane window: l, r, b, t */
-    cw_float4 background;  /* rgb */
-    cw_float4 ambient;     /* rgb ambient intensity Ia */
-    float d;               /* perspective: image-plane distance */
-    int projection;        /* CW_PROJ_* */
-    int nx, ny;            /* image size in pixels */
-    int max_depth;         /* the eye ray is depth 1 */
-    int num_spheres, num_triangles, num_polygons;
+    cw_float4 u, v, w;    /* orthonormal viewing basis */
+    cw_float4 dir;        /* oblique projection: common ray direction */
+    cw_float4 window;     /* image-plane window: l, r, b, t */
+    cw_float4 background; /* rgb */
+    cw_float4 ambient;    /* rgb ambient intensity Ia */
+    float d;              /* perspective: image-plane distance */
+    int projection;       /* CW_PROJ_* */
+    int nx, ny;           /* image size in pixels */
+    int max_depth;        /* the eye ray is depth 1 */
+    int num_spheres, num_triangles, num_polygons, num_cones;
     int num_lights;
-    int pad0, pad1, pad2;
+    int num_nodes; /* BVH nodes; 0: empty scene */
+    int spd_rays;  /* SPD counting: transmitters spawn a reflection ray even when km = 0 */
+    int pad0, pad1, pad2, pad3;
 } cw_frame;
 
 typedef struct {
     cw_float4 origin; /* xyz */
     cw_float4 dir;    /* xyz, unit length */
-    cw_float4 weight; /* rgb: product of the mirror colours along the path */
+    cw_float4 weight; /* rgb: product of the mirror and transmission colours on the path */
     int pixel;        /* index into the image (row 0 at the top); < 0: no ray */
     int depth;        /* 1 for eye rays */
-    int pad0, pad1;
+    int skip;         /* 1 + reference of the flat primitive the ray leaves (never hit
+                       * again); 0: none */
+    int pad0;
 } cw_ray;
 
+/* A shadow ray: if nothing blocks origin + t dir for 0 < t < origin.w, color is added to
+ * the pixel. */
 typedef struct {
-    float t;   /* ray parameter of the closest hit */
+    cw_float4 origin; /* xyz; w: distance to the light (tmax) */
+    cw_float4 dir;    /* xyz, unit length */
+    cw_float4 color;  /* rgb: the light's contribution if unblocked */
+    int pixel;
+    int skip; /* as in cw_ray */
+    int pad0, pad1;
+} cw_shadow_ray;
+
+/* Queue and statistics counters, one int each. */
+#define CW_COUNT_RAYS 0    /* rays appended to the next level's queue */
+#define CW_COUNT_SHADOWS 1 /* shadow rays appended */
+#define CW_COUNT_EYE_HITS 2
+#define CW_COUNT_SECONDARY_HITS 3
+#define CW_COUNT_BLOCKED 4
+#define CW_NUM_COUNTERS 8
+
+typedef struct {
+    float t;    /* ray parameter of the closest hit */
     float u, v; /* barycentric coordinates (triangles) */
-    int kind;  /* CW_PRIM_*; CW_PRIM_NONE for a miss */
-    int index; /* index into the array of that kind */
+    int kind;   /* CW_PRIM_*; CW_PRIM_NONE for a miss */
+    int index;  /* index into the array of that kind */
     int pad0, pad1, pad2;
 } cw_hit;
 
