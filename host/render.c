@@ -1398,3 +1398,66 @@ int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, cha
         return -1;
     return 0;
 }
+
+int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocked, char *err,
+                      size_t errlen)
+{
+    cl_mem saved_image;
+    size_t saved_cap, i;
+    cw_shadow_ray *marked = NULL;
+    float *px = NULL;
+    cl_int e;
+    int rc = -1;
+
+    if (need_scene(r, err, errlen) || ensure_program(r, err, errlen))
+        return -1;
+    if (n <= 0) {
+        snprintf(err, errlen, "renderer_occluded: no rays");
+        return -1;
+    }
+    /* each ray adds 1 to its own pixel of a scratch image when nothing blocks it */
+    marked = malloc((size_t)n * sizeof *marked);
+    px = malloc((size_t)n * 4 * sizeof *px);
+    if (!marked || !px) {
+        snprintf(err, errlen, "out of memory");
+        goto out_free;
+    }
+    for (i = 0; i < (size_t)n; i++) {
+        marked[i] = rays[i];
+        marked[i].pixel = (int)i;
+        marked[i].color.x = 1.0f;
+        marked[i].color.y = marked[i].color.z = 0.0f;
+    }
+    saved_image = r->image;
+    saved_cap = r->image_cap;
+    r->image = NULL;
+    r->image_cap = 0;
+    if (ensure_buffer(r, &r->image, &r->image_cap, (size_t)n * 4 * sizeof(cl_float), "image", err,
+                      errlen) ||
+        fill_zero(r, r->image, (size_t)n * 4 * sizeof(cl_float), "image", err, errlen) ||
+        ensure_buffer(r, &r->counters, &(size_t){0}, CW_NUM_COUNTERS * sizeof(cl_int), "counters",
+                      err, errlen) ||
+        ensure_buffer(r, &r->shadows, &r->shadow_cap, (size_t)n * sizeof *marked,
+                      "shadow ray queue", err, errlen))
+        goto out_restore;
+    e = clEnqueueWriteBuffer(r->queue, r->shadows, CL_TRUE, 0, (size_t)n * sizeof *marked, marked,
+                             0, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        cl_fail(e, "clEnqueueWriteBuffer(shadow rays)", r, err, errlen);
+        goto out_restore;
+    }
+    if (run_occlude(r, n, err, errlen) ||
+        read_buffer(r, r->image, (size_t)n * 4 * sizeof *px, px, "image", err, errlen))
+        goto out_restore;
+    for (i = 0; i < (size_t)n; i++)
+        blocked[i] = px[4 * i] == 0.0f;
+    rc = 0;
+out_restore:
+    release_mem(&r->image);
+    r->image = saved_image;
+    r->image_cap = saved_cap;
+out_free:
+    free(marked);
+    free(px);
+    return rc;
+}

@@ -79,9 +79,14 @@ int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size
 int renderer_read(renderer *r, image *img, char *err, size_t errlen);
 
 /* For tests: runs the ray-generation kernel and returns nx*ny rays (rays must hold that
- * many), and runs the intersection kernel on the given rays. */
+ * many), and runs the intersection kernel (closest hit over the BVH) on the given rays;
+ * a ray's skip field (1 + a primitive reference, 0 for none) must be set. */
 int renderer_generate_rays(renderer *r, cw_ray *rays, char *err, size_t errlen);
 int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, char *err,
                        size_t errlen);
+/* For tests: runs the shadow-ray (any hit) kernel on n shadow rays (origin.w = tmax) and
+ * sets blocked[i] to 1 when something lies on ray i, else 0. */
+int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocked, char *err,
+                      size_t errlen);
 
 #endif

@@ -61,7 +61,7 @@ CW_INLINE cw_hit bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, floa
     hit.kind = CW_PRIM_NONE;
     hit.index = -1;
     hit.pad0 = hit.pad1 = hit.pad2 = 0;
-    if (w->num_nodes == 0 || isect_box(&w->nodes[0], &ri, tmin, t_best) == CW_INFINITY)
+    if (w->num_nodes == 0 || isect_box(&w->nodes[0], &ri, tmin, t_best) == CW_MISS)
         return hit;
     for (;;) {
         CW_GLOBAL const cw_bvh_node *nd = &w->nodes[node];
@@ -75,7 +75,7 @@ CW_INLINE cw_hit bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, floa
             int c0 = node + 1, c1 = nd->start;
             float t0 = isect_box(&w->nodes[c0], &ri, tmin, t_best);
             float t1 = isect_box(&w->nodes[c1], &ri, tmin, t_best);
-            if (t0 != CW_INFINITY && t1 != CW_INFINITY) {
+            if (t0 != CW_MISS && t1 != CW_MISS) {
                 if (t1 < t0) {
                     int ci = c0;
                     float tt = t0;
@@ -90,11 +90,11 @@ CW_INLINE cw_hit bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, floa
                 node = c0;
                 continue;
             }
-            if (t0 != CW_INFINITY) {
+            if (t0 != CW_MISS) {
                 node = c0;
                 continue;
             }
-            if (t1 != CW_INFINITY) {
+            if (t1 != CW_MISS) {
                 node = c1;
                 continue;
             }
@@ -127,7 +127,7 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
         CW_GLOBAL const cw_bvh_node *nd;
         node = stack[--sp];
         nd = &w->nodes[node];
-        if (isect_box(nd, &ri, tmin, tmax) == CW_INFINITY)
+        if (isect_box(nd, &ri, tmin, tmax) == CW_MISS)
             continue;
         if (nd->count > 0) {
             for (k = nd->start; k < nd->start + nd->count; k++) {

@@ -66,7 +66,7 @@ __kernel void cw_intersect(CW_WORLD_ARGS, __global const cw_ray *rays, __global 
         return;
     ray = rays[gid];
     CW_MAKE_WORLD(w);
-    hit = bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, INFINITY, ray.skip);
+    hit = bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, CW_FAR, ray.skip);
     hits[gid] = hit;
 #if CW_STATS
     if (hit.kind != CW_PRIM_NONE)

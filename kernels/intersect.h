@@ -24,6 +24,11 @@
 #define CW_FAST 0
 #endif
 
+/* Finite stand-ins for infinity: the fast path is built with -cl-fast-relaxed-math,
+ * which lets the compiler assume no value is infinite. */
+#define CW_FAR 1e30f  /* tmax of camera and secondary rays */
+#define CW_MISS 3e38f /* the box test's answer for a miss */
+
 /* The scene as the kernels see it. */
 typedef struct {
     CW_GLOBAL const cw_sphere *spheres;
@@ -316,7 +321,7 @@ CW_INLINE int isect_cone(CW_GLOBAL const cw_cone *cn, vec3 o, vec3 d, float tmin
     return 0;
 }
 
-/* Ray-box slab test against [tmin, tmax]; returns the entry distance, or INFINITY for a
+/* Ray-box slab test against [tmin, tmax]; returns the entry distance, or CW_MISS for a
  * miss. The robust path widens the exit distance by 1 + 2 gamma(3) (Ize 2013), so that
  * rounding never culls a box the ray touches. */
 CW_INLINE float isect_box(CW_GLOBAL const cw_bvh_node *nd, const cw_rayinfo *ri, float tmin,
@@ -332,7 +337,7 @@ CW_INLINE float isect_box(CW_GLOBAL const cw_bvh_node *nd, const cw_rayinfo *ri,
 #if !CW_FAST
     t1 *= 1.0000004f;
 #endif
-    return t0 <= t1 ? t0 : CW_INFINITY;
+    return t0 <= t1 ? t0 : CW_MISS;
 }
 
 #endif
