@@ -228,6 +228,8 @@ int main(int argc, char **argv)
         printf("time: parse %.3f s, build %.3f s, compile %.3f s, upload %.3f s, trace %.3f s "
                "(%d passes)\n",
                t_load - t0, st.build_s, st.compile_s, st.upload_s, st.trace_s, st.passes);
+        printf("kernels: raygen %.3f s, intersect %.3f s, shade %.3f s, occlude %.3f s\n",
+               st.raygen_s, st.intersect_s, st.shade_s, st.occlude_s);
     }
     rc = 0;
 out_free_image:

@@ -92,10 +92,23 @@ static int material_is_simple(const scene_material *m)
     return 1;
 }
 
+static int transmits(const scene_material *m)
+{
+    return !is_zero3(m->kt);
+}
+
+/* Transmission (kt > 0, with refraction) is written as POV-Ray's: pigment transmit T and an
+ * interior ior. POV-Ray's model differs from clwhitted's there (it scales the local
+ * shading by the opacity 1 - T and lets light through transmitting objects to shadows),
+ * so such scenes are equivalent in work, not identical in pixels. */
 static void write_simple(FILE *f, const scene_material *m)
 {
-    fprintf(f, "  texture {\n    pigment { rgb ");
-    put3(f, m->kd);
+    fprintf(f, "  texture {\n    pigment { %s ", transmits(m) ? "rgbt" : "rgb");
+    if (transmits(m))
+        fprintf(f, "<%.9g, %.9g, %.9g, %.9g>", (double)m->kd.x, (double)m->kd.y, (double)m->kd.z,
+                (double)m->kt.x);
+    else
+        put3(f, m->kd);
     /* ambient is written as the exact quotient in double precision */
     fprintf(f, " }\n    finish {\n      ambient rgb <%.17g, %.17g, %.17g> emission 0\n",
             m->kd.x != 0.0f ? (double)m->ka.x / m->kd.x : 0.0,
@@ -258,6 +271,30 @@ static void write_camera(FILE *f, const scene_camera *c)
     fprintf(f, "\n}\n\n");
 }
 
+/* " texture { CW_Mn }" and, for transmitting materials, " interior { ior X }" */
+static void write_material_ref(FILE *f, const scene *s, int mat)
+{
+    const scene_material *m = &SCENE_AT(s->materials, scene_material, (size_t)mat);
+    fprintf(f, " texture { CW_M%d }", mat);
+    if (transmits(m) && material_is_simple(m))
+        fprintf(f, " interior { ior %.9g }", m->ior > 0 ? (double)m->ior : 1.0);
+}
+
+static void write_cones(FILE *f, const scene *s)
+{
+    size_t i;
+    for (i = 0; i < s->cones.count; i++) {
+        const scene_cone *c = &SCENE_AT(s->cones, scene_cone, i);
+        fprintf(f, "cone { ");
+        put3(f, c->base);
+        fprintf(f, ", %.9g, ", fabs((double)c->base_radius));
+        put3(f, c->apex);
+        fprintf(f, ", %.9g open", fabs((double)c->apex_radius));
+        write_material_ref(f, s, c->material);
+        fprintf(f, " }\n");
+    }
+}
+
 static void write_triangles(FILE *f, const scene *s, size_t *skipped)
 {
     size_t i = 0, n = s->triangles.count;
@@ -301,8 +338,11 @@ static void write_triangles(FILE *f, const scene *s, size_t *skipped)
             }
             fprintf(f, " }\n");
         }
-        if (any)
-            fprintf(f, "  texture { CW_M%d }\n}\n", mat);
+        if (any) {
+            fprintf(f, " ");
+            write_material_ref(f, s, mat);
+            fprintf(f, "\n}\n");
+        }
         i = end;
     }
 }
@@ -327,7 +367,9 @@ static void write_polygons(FILE *f, const scene *s, size_t *skipped)
             fprintf(f, ",\n  ");
             putd3(f, q);
         }
-        fprintf(f, "\n  texture { CW_M%d }\n}\n", p->material);
+        fprintf(f, "\n ");
+        write_material_ref(f, s, p->material);
+        fprintf(f, "\n}\n");
     }
 }
 
@@ -387,22 +429,24 @@ int pov_write_scene(const scene *s, FILE *f, char *err, size_t errlen)
         fprintf(f, "\n");
     }
     if (any_kt)
-        fprintf(f, "// transmission (kt, ior) is left out: clwhitted does not render it yet\n\n");
+        fprintf(
+            f,
+            "// transmission: POV-Ray's transmit + interior ior (see write_simple in pov.c)\n\n");
 
     for (i = 0; i < s->spheres.count; i++) {
         const scene_sphere *sp = &SCENE_AT(s->spheres, scene_sphere, i);
         fprintf(f, "sphere { ");
         put3(f, sp->center);
-        fprintf(f, ", %.9g texture { CW_M%d } }\n", fabs((double)sp->radius), sp->material);
+        fprintf(f, ", %.9g", fabs((double)sp->radius));
+        write_material_ref(f, s, sp->material);
+        fprintf(f, " }\n");
     }
     write_triangles(f, s, &tri_skipped);
     write_polygons(f, s, &poly_skipped);
     if (tri_skipped || poly_skipped)
         fprintf(f, "// left out without area: %zu triangle(s), %zu polygon(s)\n", tri_skipped,
                 poly_skipped);
-    if (s->cones.count)
-        fprintf(f, "// %zu cone(s) left out: clwhitted does not render cones yet\n",
-                s->cones.count);
+    write_cones(f, s);
     if (fflush(f) != 0 || ferror(f)) {
         snprintf(err, errlen, "write error");
         return -1;

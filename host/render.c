@@ -1106,6 +1106,22 @@ static unsigned long long total_rays(const render_stats *st)
     return st->eye_rays + st->shadow_rays + st->secondary_rays;
 }
 
+/* With statistics on, waits for the queue and adds the time since *t0 to *acc. */
+static int stats_lap(renderer *r, double *t0, double *acc, char *err, size_t errlen)
+{
+    double t;
+    cl_int e;
+    if (!r->settings.stats)
+        return 0;
+    e = clFinish(r->queue);
+    if (e != CL_SUCCESS)
+        return cl_fail(e, "clFinish", r, err, errlen);
+    t = seconds_now();
+    *acc += t - *t0;
+    *t0 = t;
+    return 0;
+}
+
 /* Traces one sample for a band of rows: ray generation, then per level one intersect,
  * one shade and one occlude launch, the next level's rays going to the other queue.
  * The only wait per level is the read of the queue counters. progress: reported after
@@ -1118,8 +1134,11 @@ static int trace_band(renderer *r, int sample, int row0, int nrows, double done,
     size_t lights = (size_t)(r->host_frame.num_lights > 0 ? r->host_frame.num_lights : 1);
     float sx, sy;
 
+    double tl = seconds_now();
+
     sample_position(r->settings.spp, sample, &sx, &sy);
-    if (ensure_image(r, err, errlen) || run_raygen(r, row0, nrows, sx, sy, err, errlen))
+    if (ensure_image(r, err, errlen) || run_raygen(r, row0, nrows, sx, sy, err, errlen) ||
+        stats_lap(r, &tl, &r->stats.raygen_s, err, errlen))
         return -1;
     r->stats.eye_rays += (unsigned long long)n;
     for (depth = 1; depth <= r->host_frame.max_depth && n > 0; depth++) {
@@ -1131,11 +1150,16 @@ static int trace_band(renderer *r, int sample, int row0, int nrows, double done,
                           (size_t)n * lights * sizeof(cw_shadow_ray), "shadow ray queue", err,
                           errlen) ||
             fill_zero(r, r->counters, CW_NUM_COUNTERS * sizeof(cl_int), "counters", err, errlen) ||
+            stats_lap(r, &tl, &r->stats.raygen_s, err, errlen) ||
             run_intersect(r, &r->rays[cur], n, err, errlen) ||
+            stats_lap(r, &tl, &r->stats.intersect_s, err, errlen) ||
             run_shade(r, &r->rays[cur], &r->rays[nxt], n, err, errlen) ||
-            read_buffer(r, r->counters, sizeof counts, counts, "counters", err, errlen))
+            read_buffer(r, r->counters, sizeof counts, counts, "counters", err, errlen) ||
+            stats_lap(r, &tl, &r->stats.shade_s, err, errlen))
             return -1;
-        if (counts[CW_COUNT_SHADOWS] > 0 && run_occlude(r, counts[CW_COUNT_SHADOWS], err, errlen))
+        if (counts[CW_COUNT_SHADOWS] > 0 &&
+            (run_occlude(r, counts[CW_COUNT_SHADOWS], err, errlen) ||
+             stats_lap(r, &tl, &r->stats.occlude_s, err, errlen)))
             return -1;
         r->stats.passes++;
         r->stats.shadow_rays += (unsigned long long)counts[CW_COUNT_SHADOWS];
@@ -1305,6 +1329,7 @@ int renderer_render(renderer *r, image *img, char *err, size_t errlen)
     r->stats.shadow_rays = r->stats.shadow_blocked = 0;
     r->stats.secondary_rays = r->stats.secondary_hits = 0;
     r->stats.passes = 0;
+    r->stats.raygen_s = r->stats.intersect_s = r->stats.shade_s = r->stats.occlude_s = 0;
     if (r->settings.spd)
         rc = render_spd(r, img, err, errlen);
     else

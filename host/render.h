@@ -50,6 +50,8 @@ typedef struct {
     double upload_s;  /* buffer creation and upload */
     double trace_s;   /* last renderer_render */
     int passes;       /* kernel passes (depth levels) of the last render */
+    /* with settings.stats only (the host then waits for each kernel): time in each kernel */
+    double raygen_s, intersect_s, shade_s, occlude_s;
 } render_stats;
 void renderer_get_stats(const renderer *r, render_stats *st);
 

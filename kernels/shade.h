@@ -134,6 +134,18 @@ CW_INLINE vec3 shade_spawn(const cw_surface *s, vec3 dir)
 #endif
 }
 
+/* x^p for 0 <= x <= 1 and p >= 0, as exp2(p log2 x): several times cheaper than a
+ * full-range pow, with a relative error of a few 1e-7 for the exponents of real
+ * materials. */
+CW_INLINE float shade_pow(float x, float p)
+{
+    if (p == 0.0f)
+        return 1.0f;
+    if (!(x > 0.0f))
+        return 0.0f;
+    return cw_exp2(p * cw_log2(x));
+}
+
 CW_INLINE int shade_material(const cw_world *w, cw_hit hit)
 {
     if (hit.kind == CW_PRIM_SPHERE)
@@ -224,7 +236,7 @@ CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
             continue;
         h = v3_norm(v3_sub(l, d));
         ndh = cw_fmax(0.0f, v3_dot(n, h));
-        c = v3_mul(v3_add(v3_scale(kd, ndl), v3_scale(ks, cw_pow(ndh, phong))),
+        c = v3_mul(v3_add(v3_scale(kd, ndl), v3_scale(ks, shade_pow(ndh, phong))),
                    v3_mul(weight, v3_from4(lights[k].intensity)));
         o = shade_spawn(&s, l);
         slot = cw_atomic_inc(&counters[CW_COUNT_SHADOWS]);
