@@ -18,6 +18,8 @@ static void usage(FILE *f)
                "  -W, --width N    image width in pixels (default: the scene's)\n"
                "  -H, --height N   image height in pixels (default: the scene's)\n"
                "  -d, --depth N    maximum ray depth, the eye ray being 1 (default: the scene's)\n"
+               "      --spd        the SPD corner grid: (W+1)x(H+1) pixels whose centres are the\n"
+               "                   corners of the WxH pixels (clwhitted --spd traces those rays)\n"
                "  -h, --help       show this help, then exit\n"
                "Render exactly as printed: at the scene's size, with -A (no anti-aliasing) and\n"
                "+FN16 File_Gamma=1.0 (linear 16-bit PNG; read it without sRGB decoding).\n"
@@ -58,7 +60,7 @@ static char *png_name(const char *pov)
 
 int main(int argc, char **argv)
 {
-    int width = 0, height = 0, depth = 0, i, rc = 1;
+    int width = 0, height = 0, depth = 0, spd = 0, i, rc = 1;
     const char *args[2];
     int nargs = 0;
     char err[2048];
@@ -81,6 +83,8 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "-d") == 0 || strcmp(a, "--depth") == 0) {
             if (parse_int("--depth", i + 1 < argc ? argv[++i] : NULL, 1, 64, &depth))
                 return 2;
+        } else if (strcmp(a, "--spd") == 0) {
+            spd = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
             fprintf(stderr, "scene2pov: unknown option '%s'\nTry 'scene2pov --help'.\n", a);
             return 2;
@@ -101,6 +105,17 @@ int main(int argc, char **argv)
         scene_finish(&s, width, height, depth, err, sizeof err) != 0) {
         fprintf(stderr, "scene2pov: %s\n", err);
         goto out;
+    }
+    if (spd) {
+        /* corners of the WxH grid = centres of a (W+1)x(H+1) grid half a pixel wider */
+        float pu = (s.camera.r - s.camera.l) / (float)s.width;
+        float pv = (s.camera.t - s.camera.b) / (float)s.height;
+        s.camera.l -= 0.5f * pu;
+        s.camera.r += 0.5f * pu;
+        s.camera.b -= 0.5f * pv;
+        s.camera.t += 0.5f * pv;
+        s.width++;
+        s.height++;
     }
     if (strcmp(args[1], "-") == 0) {
         if (pov_write_scene(&s, stdout, err, sizeof err) != 0) {
