@@ -204,11 +204,11 @@ int main(int argc, char **argv)
     const char *output = NULL, *device = NULL;
     char *default_out = NULL;
     int width = 0, height = 0, depth = 0, quiet = 0, list = 0, c, rc = 1, is_exr;
-    char err[2048], meta_settings[256], title[256], software[64];
+    char err[2048], meta_settings[256], title[256], software[64], rate[32];
     scene s;
     renderer *r = NULL;
     image img = {0, 0, NULL};
-    double t0, t_load, t_setup, t_render, t_write, trace_s, mrays_s;
+    double t0, t_load, t_setup, t_render, t_write, trace_s;
     unsigned long long rays;
     render_settings settings;
     render_stats st;
@@ -362,7 +362,7 @@ int main(int argc, char **argv)
     renderer_get_stats(r, &st);
     trace_s = st.trace_s > 0 ? st.trace_s : t_render - t_setup;
     rays = st.eye_rays + st.secondary_rays + st.shadow_rays;
-    mrays_s = trace_s > 0 ? (double)rays / trace_s * 1e-6 : 0.0;
+    progress_format_rate(rate, sizeof rate, trace_s > 0 ? (double)rays / trace_s * 1e-6 : 0.0);
 
     /* metadata */
     snprintf(software, sizeof software, "clwhitted %s", CW_VERSION);
@@ -390,9 +390,9 @@ int main(int argc, char **argv)
     t_write = now_seconds();
     if (!quiet)
         printf("clwhitted: wrote %s (%dx%d, depth %d) in %.3f s on %s: load %.3f s, setup %.3f s, "
-               "render %.3f s, %.2f Mrays/s\n",
+               "render %.3f s, %s Mrays/s\n",
                output, s.width, s.height, s.max_depth, t_write - t0, renderer_device_name(r),
-               t_load - t0, t_setup - t_load, t_render - t_setup, mrays_s);
+               t_load - t0, t_setup - t_load, t_render - t_setup, rate);
     if (settings.stats) {
         printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu "
                "(hit %llu)\n",

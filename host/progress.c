@@ -81,6 +81,13 @@ void progress_begin(progress_bar *p)
     p->last = -1.0;
 }
 
+void progress_format_rate(char *buf, size_t n, double mrays_per_s)
+{
+    if (!(mrays_per_s > 0)) /* also NaN */
+        mrays_per_s = 0;
+    snprintf(buf, n, mrays_per_s > 0 && mrays_per_s < 0.1 ? "%.4f" : "%.2f", mrays_per_s);
+}
+
 void progress_format_time(char *buf, size_t n, double seconds)
 {
     long s = seconds > 0 ? (long)floor(seconds + 0.5) : 0;
@@ -120,7 +127,7 @@ void progress_format(char *buf, size_t n, int columns, double fraction, unsigned
     else
         snprintf(eta, sizeof eta, "--:--");
     if (elapsed > 0)
-        snprintf(rate, sizeof rate, "%.2f", (double)rays / elapsed * 1e-6);
+        progress_format_rate(rate, sizeof rate, (double)rays / elapsed * 1e-6);
     else
         snprintf(rate, sizeof rate, "--");
     snprintf(text, sizeof text, "%3d%%  %.2f Mrays  %s elapsed  ETA %s  %s Mrays/s",

@@ -36,6 +36,8 @@ void progress_clear(progress_bar *p);
  * "[#####-----]  45%  1.23 Mrays  0:03 elapsed  ETA 0:04  2.10 Mrays/s". */
 void progress_format(char *buf, size_t n, int columns, double fraction, unsigned long long rays,
                      double elapsed);
+/* A rate in Mrays/s: two decimals, four below 0.1 (slow renders are not all "0.00"). */
+void progress_format_rate(char *buf, size_t n, double mrays_per_s);
 /* "m:ss", or "h:mm:ss" from an hour on. */
 void progress_format_time(char *buf, size_t n, double seconds);
 

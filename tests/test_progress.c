@@ -27,6 +27,22 @@ static void test_wanted(void **state)
     assert_int_equal(progress_wanted(1, "always", 1), 0);
 }
 
+static void test_rate(void **state)
+{
+    char b[32];
+    (void)state;
+    progress_format_rate(b, sizeof b, 12.345);
+    assert_string_equal(b, "12.35");
+    progress_format_rate(b, sizeof b, 0.1);
+    assert_string_equal(b, "0.10");
+    progress_format_rate(b, sizeof b, 0.0123456);
+    assert_string_equal(b, "0.0123");
+    progress_format_rate(b, sizeof b, 0);
+    assert_string_equal(b, "0.00");
+    progress_format_rate(b, sizeof b, -1);
+    assert_string_equal(b, "0.00");
+}
+
 static void test_time(void **state)
 {
     char b[32];
@@ -75,8 +91,8 @@ static void test_format(void **state)
     assert_non_null(strstr(b, "[----------"));
 
     /* ETA from the fraction and the elapsed time: a quarter in 10 s leaves 30 s */
-    progress_format(b, sizeof b, 300, 0.25, 1000000, 10.0);
-    assert_non_null(strstr(b, " 25%  1.00 Mrays  0:10 elapsed  ETA 0:30  0.10 Mrays/s"));
+    progress_format(b, sizeof b, 300, 0.25, 2000000, 10.0);
+    assert_non_null(strstr(b, " 25%  2.00 Mrays  0:10 elapsed  ETA 0:30  0.20 Mrays/s"));
 
     /* out-of-range fractions are clamped; NaN is 0 */
     progress_format(b, sizeof b, 300, 1.7, 0, 1.0);
@@ -156,9 +172,8 @@ static void test_draw_and_clear(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_wanted),
-        cmocka_unit_test(test_time),
-        cmocka_unit_test(test_format),
+        cmocka_unit_test(test_wanted),         cmocka_unit_test(test_rate),
+        cmocka_unit_test(test_time),           cmocka_unit_test(test_format),
         cmocka_unit_test(test_draw_and_clear),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
