@@ -2,10 +2,17 @@
 #   make          build build/clwhitted
 #   make render   install missing packages, build, render the default scene
 #   make test     build and run the whole test suite (on PoCL)
+#   make install  install clwhitted and its man page (PREFIX, BINDIR, MANDIR, DESTDIR)
+#   make gallery  render docs/gallery/ (the SPD scenes from SPD_DIR and the default scene)
+#   make format   clang-format the C sources; make format-check checks them (CI)
 
 CC      ?= cc
 BUILD   := build
 PREFIX  ?= /usr/local
+BINDIR  ?= $(PREFIX)/bin
+MANDIR  ?= $(PREFIX)/share/man
+INSTALL ?= install
+SPD_DIR ?= ../shared/scenes/spd
 
 # Strict warnings: every host file, every test.
 WARN    := -std=c99 -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes \
@@ -28,7 +35,7 @@ TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(patsubst tests/%.c,$(BUILD)/%,$(TEST_SRC))
 DEFAULT_SCENE := scenes/default.json
 
-.PHONY: all render test clean deps format format-check
+.PHONY: all render test clean deps format format-check install uninstall gallery
 all: $(BUILD)/clwhitted $(BUILD)/scene2pov
 
 $(BUILD):
@@ -69,13 +76,30 @@ test: $(BUILD)/clwhitted $(TEST_BIN)
 	    echo "== $$t"; $$t || fail=1; \
 	done; \
 	sh tests/cli.sh $(BUILD)/clwhitted || fail=1; \
+	sh tests/install.sh || fail=1; \
+	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
 
+# The installed binary needs nothing else at run time: the kernels are embedded.
+install: $(BUILD)/clwhitted
+	$(INSTALL) -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(MANDIR)/man1
+	$(INSTALL) -m 755 $(BUILD)/clwhitted $(DESTDIR)$(BINDIR)/clwhitted
+	$(INSTALL) -m 644 docs/clwhitted.1 $(DESTDIR)$(MANDIR)/man1/clwhitted.1
+
+uninstall:
+	rm -f $(DESTDIR)$(BINDIR)/clwhitted $(DESTDIR)$(MANDIR)/man1/clwhitted.1
+
+# The seven SPD scenes at 512x512 and the default scene, with times, in docs/gallery/.
+gallery: $(BUILD)/clwhitted
+	SPD_DIR='$(SPD_DIR)' sh tools/gallery $(BUILD)/clwhitted
+
+FORMAT_SRC = host/*.c host/*.h tests/*.c tests/*.h tools/*.c
+
 format:
-	clang-format -i host/*.c host/*.h tests/*.c tests/*.h
+	clang-format -i $(FORMAT_SRC)
 
 format-check:
-	clang-format --dry-run -Werror host/*.c host/*.h tests/*.c tests/*.h
+	clang-format --dry-run -Werror $(FORMAT_SRC)
 
 clean:
 	rm -rf $(BUILD)

@@ -13,6 +13,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <openexr.h>
@@ -72,6 +73,78 @@ static int has_ext(const char *path, const char *ext)
             return 0;
     }
     return *dot == '\0' && *ext == '\0';
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* Options, tone mapping, metadata times                                                 */
+
+void image_write_opts_default(image_write_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->exposure = 0.0;
+    o->tonemap = IMAGE_TONEMAP_CLAMP;
+    o->render_s = -1.0;
+}
+
+int image_tonemap_parse(const char *name)
+{
+    if (strcmp(name, "clamp") == 0)
+        return IMAGE_TONEMAP_CLAMP;
+    if (strcmp(name, "reinhard") == 0)
+        return IMAGE_TONEMAP_REINHARD;
+    if (strcmp(name, "aces") == 0)
+        return IMAGE_TONEMAP_ACES;
+    return -1;
+}
+
+const char *image_tonemap_name(int tonemap)
+{
+    switch (tonemap) {
+    case IMAGE_TONEMAP_REINHARD:
+        return "reinhard";
+    case IMAGE_TONEMAP_ACES:
+        return "aces";
+    default:
+        return "clamp";
+    }
+}
+
+/* Tone maps an exposed linear value to [0,1]; NaN and non-positive values give 0. */
+static double tonemap_value(double x, int tonemap)
+{
+    if (!(x > 0.0))
+        return 0.0;
+    if (x > 1e100) /* also +inf: every curve is at (or clamped to) 1 there */
+        return 1.0;
+    if (tonemap == IMAGE_TONEMAP_REINHARD)
+        x = x / (1.0 + x);
+    else if (tonemap == IMAGE_TONEMAP_ACES)
+        x = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
+    return x > 1.0 ? 1.0 : x;
+}
+
+double image_display_value(double linear, double exposure, int tonemap)
+{
+    return tonemap_value(linear * pow(2.0, exposure), tonemap);
+}
+
+const char *image_library_versions(void)
+{
+    static char buf[128];
+    int maj = 0, min = 0, patch = 0;
+    const char *extra = NULL;
+    exr_get_library_version(&maj, &min, &patch, &extra);
+    snprintf(buf, sizeof buf, "libpng %s, OpenEXR %d.%d.%d%s", png_get_libpng_ver(NULL), maj, min,
+             patch, extra ? extra : "");
+    return buf;
+}
+
+static const image_write_opts *opts_or_default(const image_write_opts *o, image_write_opts *def)
+{
+    if (o)
+        return o;
+    image_write_opts_default(def);
+    return def;
 }
 
 /* ------------------------------------------------------------------------------------ */
@@ -268,7 +341,107 @@ static int exr_failed(exr_state *st, exr_result_t rv, const char *desc, const ch
     return 0;
 }
 
-int image_write_exr(const image *img, const char *path, char *err, size_t errlen)
+/* IEEE 754 binary32 -> binary16, rounding to nearest even; overflow gives infinity, NaN
+ * stays NaN. */
+static uint16_t float_to_half(float f)
+{
+    uint32_t x, sign, mant, h, rem, halfway;
+    int e, shift;
+    memcpy(&x, &f, sizeof x);
+    sign = (x >> 16) & 0x8000u;
+    mant = x & 0x7fffffu;
+    e = (int)((x >> 23) & 0xffu);
+    if (e == 0xff) /* infinity or NaN (kept quiet and non-zero) */
+        return (uint16_t)(sign | 0x7c00u | (mant ? 0x200u | (mant >> 13) : 0u));
+    e = e - 127 + 15;
+    if (e >= 31)
+        return (uint16_t)(sign | 0x7c00u);
+    if (e <= 0) { /* a half subnormal, or zero */
+        if (e < -10)
+            return (uint16_t)sign;
+        mant |= 0x800000u;
+        shift = 14 - e;
+        h = mant >> shift;
+        rem = mant & ((1u << shift) - 1u);
+        halfway = 1u << (shift - 1);
+    } else {
+        h = ((uint32_t)e << 10) | (mant >> 13);
+        rem = mant & 0x1fffu;
+        halfway = 0x1000u;
+    }
+    if (rem > halfway || (rem == halfway && (h & 1u)))
+        h++; /* a carry into the exponent is right, up to infinity */
+    return (uint16_t)(sign | h);
+}
+
+/* Local time as "YYYY:MM:DD hh:mm:ss" (the EXR capDate form) or ISO 8601 UTC, and UTC
+ * minus local time in seconds (the EXR utcOffset). */
+static void exr_cap_date(time_t t, char *buf, size_t n, float *utc_offset)
+{
+    struct tm local, utc;
+    time_t as_local;
+    buf[0] = '\0';
+    *utc_offset = 0.0f;
+    if (!localtime_r(&t, &local) || !gmtime_r(&t, &utc))
+        return;
+    strftime(buf, n, "%Y:%m:%d %H:%M:%S", &local);
+    utc.tm_isdst = -1;
+    as_local = mktime(&utc); /* the UTC wall time read as local time */
+    if (as_local != (time_t)-1)
+        *utc_offset = (float)difftime(as_local, t);
+}
+
+static void iso8601_utc(time_t t, char *buf, size_t n)
+{
+    struct tm utc;
+    buf[0] = '\0';
+    if (gmtime_r(&t, &utc))
+        strftime(buf, n, "%Y-%m-%dT%H:%M:%SZ", &utc);
+}
+
+/* Sets the metadata attributes of part 0 (before the header is written). */
+static exr_result_t exr_set_meta(exr_context_t ctx, const image_write_opts *o, const char **what)
+{
+    const struct {
+        const char *name, *value;
+    } strs[] = {{"scene", o->title},
+                {"software", o->software},
+                {"device", o->source},
+                {"comments", o->comment}};
+    char date[32];
+    float utc_offset;
+    exr_result_t rv;
+    for (size_t i = 0; i < sizeof strs / sizeof strs[0]; i++) {
+        if (!strs[i].value)
+            continue;
+        rv = exr_attr_set_string(ctx, 0, strs[i].name, strs[i].value);
+        if (rv != EXR_ERR_SUCCESS) {
+            *what = "exr_attr_set_string";
+            return rv;
+        }
+    }
+    if (o->render_s >= 0) {
+        rv = exr_attr_set_float(ctx, 0, "renderTime", (float)o->render_s);
+        if (rv != EXR_ERR_SUCCESS) {
+            *what = "exr_attr_set_float(renderTime)";
+            return rv;
+        }
+    }
+    exr_cap_date(time(NULL), date, sizeof date, &utc_offset);
+    if (date[0]) {
+        rv = exr_attr_set_string(ctx, 0, "capDate", date);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_attr_set_float(ctx, 0, "utcOffset", utc_offset);
+        if (rv != EXR_ERR_SUCCESS) {
+            *what = "exr_attr_set (capDate, utcOffset)";
+            return rv;
+        }
+    }
+    return EXR_ERR_SUCCESS;
+}
+
+static int write_exr(const image *img, const char *path, const image_write_opts *o, char *err,
+                     size_t errlen)
 {
     static const char *const names[3] = {"R", "G", "B"};
     exr_state st;
@@ -281,7 +454,9 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
     const char *what = NULL;
     int part = 0;
     int32_t lines = 0, chunks = 0;
-    size_t w, line_bytes;
+    size_t w, line_bytes, elem = o->half ? sizeof(uint16_t) : sizeof(float);
+    uint16_t *halves = NULL; /* the pixels as half floats, when o->half */
+    const unsigned char *pixels = (const unsigned char *)img->rgb;
 
     if (check_image(img, path, err, errlen) != 0)
         return -1;
@@ -290,9 +465,22 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
         return -1;
     }
     w = (size_t)img->width;
-    line_bytes = w * 3 * sizeof(float);
-    if (tmp_open(&t, path, err, errlen) != 0)
+    line_bytes = w * 3 * elem;
+    if (o->half) {
+        size_t n = w * (size_t)img->height * 3;
+        halves = malloc(n * sizeof *halves);
+        if (!halves) {
+            set_err(err, errlen, "%s: out of memory", path);
+            return -1;
+        }
+        for (size_t i = 0; i < n; i++)
+            halves[i] = float_to_half(img->rgb[i]);
+        pixels = (const unsigned char *)halves;
+    }
+    if (tmp_open(&t, path, err, errlen) != 0) {
+        free(halves);
         return -1;
+    }
 
     memset(&st, 0, sizeof st);
     st.fd = t.fd;
@@ -316,10 +504,15 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
         goto fail;
     for (int c = 0; c < 3; c++)
         if (exr_failed(&st,
-                       (rv = exr_add_channel(ctx, part, names[c], EXR_PIXEL_FLOAT,
+                       (rv = exr_add_channel(ctx, part, names[c],
+                                             o->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT,
                                              EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1)),
                        "exr_add_channel", &what))
             goto fail;
+    rv = exr_set_meta(ctx, o, &what); /* names the failed step in what */
+    if (rv != EXR_ERR_SUCCESS)
+        goto fail;
+    st.msg[0] = '\0';
     if (exr_failed(&st, (rv = exr_write_header(ctx)), "exr_write_header", &what))
         goto fail;
     if (exr_failed(&st, (rv = exr_get_scanlines_per_chunk(ctx, part, &lines)),
@@ -337,7 +530,7 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
     for (int32_t ci = 0; ci < chunks; ci++) {
         exr_chunk_info_t cinfo;
         int y = ci * lines;
-        const unsigned char *row = (const unsigned char *)img->rgb + (size_t)y * line_bytes;
+        const unsigned char *row = pixels + (size_t)y * line_bytes;
         if (exr_failed(&st, (rv = exr_write_scanline_chunk_info(ctx, part, y, &cinfo)),
                        "exr_write_scanline_chunk_info", &what))
             goto fail;
@@ -364,11 +557,11 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
                         ch->channel_name ? ch->channel_name : "?");
                 goto fail_quiet;
             }
-            ch->user_bytes_per_element = (int16_t)sizeof(float);
-            ch->user_data_type = EXR_PIXEL_FLOAT;
-            ch->user_pixel_stride = (int32_t)(3 * sizeof(float));
+            ch->user_bytes_per_element = (int16_t)elem;
+            ch->user_data_type = o->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+            ch->user_pixel_stride = (int32_t)(3 * elem);
             ch->user_line_stride = (int32_t)line_bytes;
-            ch->encode_from_ptr = row + (size_t)comp * sizeof(float);
+            ch->encode_from_ptr = row + (size_t)comp * elem;
         }
         if (ci == 0)
             if (exr_failed(&st, (rv = exr_encoding_choose_default_routines(ctx, part, &enc)),
@@ -389,6 +582,7 @@ int image_write_exr(const image *img, const char *path, char *err, size_t errlen
             rv = EXR_ERR_WRITE_IO;
         goto fail;
     }
+    free(halves);
     return tmp_commit(&t, path, err, errlen);
 
 fail:
@@ -399,7 +593,15 @@ fail_quiet:
     if (ctx)
         exr_finish(&ctx);
     tmp_abort(&t);
+    free(halves);
     return -1;
+}
+
+int image_write_exr(const image *img, const char *path, char *err, size_t errlen)
+{
+    image_write_opts def;
+    image_write_opts_default(&def);
+    return write_exr(img, path, &def, err, errlen);
 }
 
 /* Reads R, G, B (or Y, as grey) from part 0 of a scanline or tiled EXR. The result covers
@@ -737,10 +939,10 @@ static double srgb_decode(double v)
     return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
 }
 
-/* Linear float -> 8-bit sRGB: NaN -> 0, clamp to [0,1], encode, round to nearest. */
-static unsigned char to_srgb8(float f)
+/* Display value (see tonemap_value) -> 8-bit sRGB: NaN -> 0, clamp to [0,1], encode,
+ * round to nearest. */
+static unsigned char to_srgb8(double x)
 {
-    double x = f;
     if (!(x > 0.0)) /* also NaN */
         return 0;
     if (x >= 1.0)
@@ -748,8 +950,57 @@ static unsigned char to_srgb8(float f)
     return (unsigned char)floor(srgb_encode(x) * 255.0 + 0.5);
 }
 
+/* The PNG text chunks and modification time of image_write_opts' metadata. */
+#define PNG_META_MAX 6
+typedef struct {
+    png_text text[PNG_META_MAX];
+    int count;
+    png_time mtime;
+    char render_time[32], created[32];
+} png_meta;
+
+static int is_ascii(const char *s)
+{
+    for (; *s; s++)
+        if ((unsigned char)*s >= 0x80)
+            return 0;
+    return 1;
+}
+
+static void png_meta_add(png_meta *m, const char *key, const char *value)
+{
+    png_text *t;
+    if (!value || !*value || m->count >= PNG_META_MAX)
+        return;
+    t = &m->text[m->count++];
+    memset(t, 0, sizeof *t);
+    /* tEXt is Latin-1: UTF-8 (anything non-ASCII) goes into an uncompressed iTXt chunk. */
+    t->compression = is_ascii(value) ? PNG_TEXT_COMPRESSION_NONE : PNG_ITXT_COMPRESSION_NONE;
+    t->key = (png_charp)key;
+    t->text = (png_charp)value;
+    t->text_length = strlen(value);
+}
+
+static void png_meta_fill(png_meta *m, const image_write_opts *o)
+{
+    time_t now = time(NULL);
+    memset(m, 0, sizeof *m);
+    png_meta_add(m, "Title", o->title);
+    png_meta_add(m, "Software", o->software);
+    png_meta_add(m, "Source", o->source);
+    png_meta_add(m, "Comment", o->comment);
+    if (o->render_s >= 0) {
+        snprintf(m->render_time, sizeof m->render_time, "%.3f s", o->render_s);
+        png_meta_add(m, "Render Time", m->render_time);
+    }
+    iso8601_utc(now, m->created, sizeof m->created);
+    png_meta_add(m, "Creation Time", m->created);
+    png_convert_from_time_t(&m->mtime, now);
+}
+
 /* Writes an 8-bit RGB PNG from `data` (h rows of 3*w bytes) to fp. */
-static int png_write_rgb8(FILE *fp, const unsigned char *data, int w, int h, png_errctx *e)
+static int png_write_rgb8(FILE *fp, const unsigned char *data, int w, int h, const png_meta *m,
+                          png_errctx *e)
 {
     png_structp png =
         png_create_write_struct(PNG_LIBPNG_VER_STRING, e, png_error_cb, png_warning_cb);
@@ -773,6 +1024,10 @@ static int png_write_rgb8(FILE *fp, const unsigned char *data, int w, int h, png
                  PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     /* sRGB chunk plus the matching gAMA and cHRM for decoders that ignore sRGB. */
     png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    if (m->count > 0)
+        png_set_text(png, info, m->text, m->count);
+    png_set_tIME(png, info, &m->mtime);
+    png_set_compression_level(png, 9);
     png_write_info(png, info);
     for (int y = 0; y < h; y++)
         png_write_row(png, data + (size_t)y * (size_t)w * 3);
@@ -781,14 +1036,17 @@ static int png_write_rgb8(FILE *fp, const unsigned char *data, int w, int h, png
     return 0;
 }
 
-int image_write_png(const image *img, const char *path, char *err, size_t errlen)
+static int write_png(const image *img, const char *path, const image_write_opts *o, char *err,
+                     size_t errlen)
 {
     size_t n;
     unsigned char *data;
     tmpfile_t t;
     FILE *fp;
     png_errctx e;
+    png_meta meta;
     int rc, werr;
+    double scale = pow(2.0, o->exposure);
 
     if (check_image(img, path, err, errlen) != 0)
         return -1;
@@ -803,7 +1061,8 @@ int image_write_png(const image *img, const char *path, char *err, size_t errlen
         return -1;
     }
     for (size_t i = 0; i < n; i++)
-        data[i] = to_srgb8(img->rgb[i]);
+        data[i] = to_srgb8(tonemap_value(img->rgb[i] * scale, o->tonemap));
+    png_meta_fill(&meta, o);
 
     if (tmp_open(&t, path, err, errlen) != 0) {
         free(data);
@@ -817,7 +1076,7 @@ int image_write_png(const image *img, const char *path, char *err, size_t errlen
         return -1;
     }
     memset(&e, 0, sizeof e);
-    rc = png_write_rgb8(fp, data, img->width, img->height, &e);
+    rc = png_write_rgb8(fp, data, img->width, img->height, &meta, &e);
     free(data);
     werr = 0;
     if (rc == 0 && fflush(fp) != 0)
@@ -843,6 +1102,13 @@ int image_write_png(const image *img, const char *path, char *err, size_t errlen
     return tmp_commit(&t, path, err, errlen);
 }
 
+int image_write_png(const image *img, const char *path, char *err, size_t errlen)
+{
+    image_write_opts def;
+    image_write_opts_default(&def);
+    return write_png(img, path, &def, err, errlen);
+}
+
 int image_check_path(const char *path, char *err, size_t errlen)
 {
     if (!path || !*path) {
@@ -855,13 +1121,21 @@ int image_check_path(const char *path, char *err, size_t errlen)
     return -1;
 }
 
-int image_write(const image *img, const char *path, char *err, size_t errlen)
+int image_write_ex(const image *img, const char *path, const image_write_opts *o, char *err,
+                   size_t errlen)
 {
+    image_write_opts def;
+    o = opts_or_default(o, &def);
     if (image_check_path(path, err, errlen) != 0)
         return -1;
     if (has_ext(path, ".exr"))
-        return image_write_exr(img, path, err, errlen);
-    return image_write_png(img, path, err, errlen);
+        return write_exr(img, path, o, err, errlen);
+    return write_png(img, path, o, err, errlen);
+}
+
+int image_write(const image *img, const char *path, char *err, size_t errlen)
+{
+    return image_write_ex(img, path, NULL, err, errlen);
 }
 
 /* Decoded PNG: RGB samples, 8- or 16-bit (16-bit in host byte order). Owned by the caller

@@ -80,17 +80,6 @@ static int cl_fail(cl_int e, const char *call, const renderer *r, char *err, siz
 
 /* ---- devices ---------------------------------------------------------------------- */
 
-static const char *device_type_name(cl_device_type t)
-{
-    if (t & CL_DEVICE_TYPE_CPU)
-        return "CPU";
-    if (t & CL_DEVICE_TYPE_GPU)
-        return "GPU";
-    if (t & CL_DEVICE_TYPE_ACCELERATOR)
-        return "accelerator";
-    return "other";
-}
-
 /* Gets every platform; *out is malloc'd. */
 static int get_platforms(cl_platform_id **out, cl_uint *count, char *err, size_t errlen)
 {
@@ -142,55 +131,6 @@ static int get_devices(cl_platform_id p, cl_device_id **out, cl_uint *count, cha
         return cl_fail(e, "clGetDeviceIDs", NULL, err, errlen);
     }
     *count = n;
-    return 0;
-}
-
-int renderer_list_devices(char *err, size_t errlen)
-{
-    cl_platform_id *plats = NULL;
-    cl_uint np = 0, i, j;
-    if (get_platforms(&plats, &np, err, errlen) != 0)
-        return -1;
-    for (i = 0; i < np; i++) {
-        char pname[256] = "";
-        cl_device_id *devs = NULL;
-        cl_uint nd = 0;
-        cl_int e = clGetPlatformInfo(plats[i], CL_PLATFORM_NAME, sizeof pname, pname, NULL);
-        if (e != CL_SUCCESS) {
-            free(plats);
-            return cl_fail(e, "clGetPlatformInfo(CL_PLATFORM_NAME)", NULL, err, errlen);
-        }
-        printf("platform %u: %s\n", i, pname);
-        if (get_devices(plats[i], &devs, &nd, err, errlen) != 0) {
-            free(plats);
-            return -1;
-        }
-        for (j = 0; j < nd; j++) {
-            char dname[256] = "", ver[128] = "";
-            cl_device_type type = 0;
-            cl_uint units = 0;
-            cl_ulong mem = 0;
-            cl_int e2 = clGetDeviceInfo(devs[j], CL_DEVICE_NAME, sizeof dname, dname, NULL);
-            if (e2 == CL_SUCCESS)
-                e2 = clGetDeviceInfo(devs[j], CL_DEVICE_TYPE, sizeof type, &type, NULL);
-            if (e2 == CL_SUCCESS)
-                e2 = clGetDeviceInfo(devs[j], CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units,
-                                     NULL);
-            if (e2 == CL_SUCCESS)
-                e2 = clGetDeviceInfo(devs[j], CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
-            if (e2 == CL_SUCCESS)
-                e2 = clGetDeviceInfo(devs[j], CL_DEVICE_OPENCL_C_VERSION, sizeof ver, ver, NULL);
-            if (e2 != CL_SUCCESS) {
-                free(devs);
-                free(plats);
-                return cl_fail(e2, "clGetDeviceInfo", NULL, err, errlen);
-            }
-            printf("  device %u:%u  %-11s %s, %u compute units, %llu MiB, %s\n", i, j,
-                   device_type_name(type), dname, units, (unsigned long long)(mem >> 20), ver);
-        }
-        free(devs);
-    }
-    free(plats);
     return 0;
 }
 

@@ -10,7 +10,8 @@
 
 typedef struct renderer renderer;
 
-/* Lists every OpenCL platform and device on stdout. Returns 0, or -1 with err. */
+/* Lists every OpenCL platform and device on stdout (host/devices.c). Returns 0, or -1
+ * with err. */
 int renderer_list_devices(char *err, size_t errlen);
 
 /* Opens a device. spec: NULL or "" for the default (the first CPU device, i.e. PoCL),

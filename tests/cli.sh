@@ -78,5 +78,110 @@ check_true "no warning for cones or transmission" test ! -s "$T/err"
 "$BIN" --device 0:0 -q -o "$T/dev.png" -W 8 -H 6 scenes/default.json >"$T/out" 2>"$T/err"
 check "--device 0:0" 0 $?
 
+# --version, --help: every option (from main.c's option table) in the help and the man page
+"$BIN" --version >"$T/out" 2>"$T/err"; check "--version" 0 $?
+check_grep "--version prints the version" "^clwhitted [0-9][0-9.]*$" "$T/out"
+check_grep "--version names the libraries" "libpng .*OpenEXR" "$T/out"
+"$BIN" --help >"$T/out" 2>"$T/err"
+opts=$(sed -n 's/.*{"\([a-z-]*\)", *[a-z_]*_argument,.*/\1/p' "$ROOT/host/main.c")
+check_true "option table found" test "$(echo "$opts" | wc -l)" -ge 16
+for o in $opts; do
+    check_grep "--help lists --$o" "^ .*--$o\b" "$T/out"
+    check_true "man page lists --$o" sh -c "tr -d '\\\\' <'$ROOT/docs/clwhitted.1' | grep -q -- '--$o'"
+done
+for o in output width height depth spp precision spd device exposure tonemap half stats quiet; do
+    check_true "--help gives the default of --$o" sh -c \
+        "sed -n '/--$o /,/default/p' '$T/out' | grep -q '(default: [^)]*)'"
+done
+check_grep "--help: exposure default" "(default: 0)" "$T/out"
+check_grep "--help: tonemap default" "(default: clamp)" "$T/out"
+check_grep "--help: exit status" "Exit status: 0 success, 1 input or render error, 2 usage error" "$T/out"
+for v in CLWHITTED_BUILD_OPTIONS CLWHITTED_PROGRESS POCL_DEVICES POCL_CACHE_DIR; do
+    check_grep "--help documents $v" "^  $v " "$T/out"
+    check_true "README documents $v" grep -q "^| \`$v\`" "$ROOT/README.md"
+done
+
+# usage errors: exit 2, one line naming the problem, then the hint
+usage_error() { # usage_error NAME PATTERN ARGS...
+    n=$1 pat=$2; shift 2
+    "$BIN" "$@" >"$T/out" 2>"$T/err"; check "$n" 2 $?
+    check_true "$n: two lines" test "$(wc -l <"$T/err")" -eq 2
+    check_true "$n: reason" sh -c "head -n 1 '$T/err' | grep -q -- \"^clwhitted: .*$pat\""
+    check_true "$n: hint" sh -c "tail -n 1 '$T/err' | grep -qx \"Try 'clwhitted --help'.\""
+    check_true "$n: nothing on stdout" test ! -s "$T/out"
+}
+usage_error "unknown long option" "frobnicate" --frobnicate scenes/default.json
+usage_error "unknown short option" "'x'" -x scenes/default.json
+usage_error "ambiguous option" "--de" --de 3 scenes/default.json
+usage_error "missing value" "'o'" scenes/default.json -o
+usage_error "value for a flag" "--half" --half=1 scenes/default.json
+usage_error "bad width" "--width expects an integer in 1..65536, got 'abc'" --width abc scenes/default.json
+usage_error "bad spp" "--spp expects" --spp 0 scenes/default.json
+usage_error "bad precision" "--precision expects" --precision exact scenes/default.json
+usage_error "bad exposure" "--exposure expects a number" --exposure bright scenes/default.json
+usage_error "exposure out of range" "--exposure expects a number in -64..64" --exposure 100 scenes/default.json
+usage_error "bad tonemap" "--tonemap expects 'clamp', 'reinhard' or 'aces', got 'filmic'" --tonemap filmic scenes/default.json
+usage_error "no scene" "no scene file given"
+usage_error "two scenes" "more than one scene file" scenes/default.json scenes/default.json
+usage_error "bad extension" "unsupported image extension" -o "$T/x.jpg" scenes/default.json
+
+# --list-devices: platform, device, type, compute units, memory, OpenCL C, fp64
+"$BIN" --list-devices >"$T/out" 2>"$T/err"; check "--list-devices details" 0 $?
+check_grep "--list-devices: platform and version" "^platform 0: .* (OpenCL [0-9]" "$T/out"
+check_grep "--list-devices: P:D, type, name" "^  device 0:0  \(CPU\|GPU\|accelerator\|custom\|other\)  ." "$T/out"
+check_grep "--list-devices: units, memory, max alloc, OpenCL C, fp64" \
+    "^ *[0-9][0-9]* compute units, [0-9.]* [MG]iB memory (max alloc [0-9.]* [MG]iB), OpenCL C [0-9]\.[0-9].*, fp64 \(yes\|no\)$" "$T/out"
+
+# the summary line: output, size, time, device, phases, Mrays/s
+"$BIN" -W 16 -H 12 -o "$T/sum.png" scenes/default.json >"$T/out" 2>"$T/err"; check "summary render" 0 $?
+check_grep "summary line" \
+    "^clwhitted: wrote $T/sum.png (16x12, depth [0-9]*) in [0-9.]* s on .*: load [0-9.]* s, setup [0-9.]* s, render [0-9.]* s, [0-9.]* Mrays/s$" "$T/out"
+check_true "one summary line" test "$(wc -l <"$T/out")" -eq 1
+check_true "no progress bar when stderr is a file" test ! -s "$T/err"
+
+# the progress bar: forced on a file, it draws in place and clears the line at the end
+CLWHITTED_PROGRESS=always "$BIN" -W 32 -H 24 --spp 2 -o "$T/p.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "forced progress" 0 $?
+check_true "bar drawn with \\r" sh -c "tr '\\r' '\\n' <'$T/err' | grep -Eq '^\\[[#-]+\\] +[0-9]+%  [0-9.]+ Mrays  [0-9:]+ elapsed  ETA [0-9:-]+  [0-9.-]+ Mrays/s\$'"
+check_true "no newline in the bar" test "$(wc -l <"$T/err")" -eq 0
+check_true "line cleared at the end" sh -c "tail -c 2 '$T/err' | od -An -c | grep -q ' *\\\\r'"
+check_true "line cleared with spaces" sh -c "tr '\\r' '\\n' <'$T/err' | tail -n 1 | grep -q '^ *\$'"
+check_grep "summary still on stdout" "^clwhitted: wrote" "$T/out"
+CLWHITTED_PROGRESS=always "$BIN" -q -W 16 -H 12 -o "$T/pq.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "forced progress, quiet" 0 $?
+check_true "--quiet: no bar" test ! -s "$T/err"
+check_true "--quiet: no summary" test ! -s "$T/out"
+if script -qec true /dev/null >/dev/null 2>&1; then
+    # on a terminal (a pty from script): the bar appears, and CLWHITTED_PROGRESS=never hides it
+    script -qec "'$BIN' -W 32 -H 24 -o '$T/tty.png' scenes/default.json" /dev/null >"$T/out" 2>&1
+    check "render on a terminal" 0 $?
+    check_true "bar on a terminal" grep -q " elapsed  ETA " "$T/out"
+    check_true "bar on a terminal uses \\r" sh -c "tr '\\r' '\\n' <'$T/out' | grep -Eq '^\\[[#-]+\\] +[0-9]+%'"
+    CLWHITTED_PROGRESS=never script -qec "'$BIN' -W 32 -H 24 -o '$T/tty.png' scenes/default.json" /dev/null >"$T/out" 2>&1
+    check_true "CLWHITTED_PROGRESS=never on a terminal" sh -c "! grep -q ' elapsed ' '$T/out'"
+    script -qec "'$BIN' -q -W 32 -H 24 -o '$T/tty.png' scenes/default.json" /dev/null >"$T/out" 2>&1
+    check_true "--quiet on a terminal: nothing" sh -c "! tr -d '\\r\\n' <'$T/out' | grep -q ."
+else
+    echo "cli.sh: no 'script' (util-linux): terminal checks skipped"
+fi
+
+# output options and metadata
+"$BIN" -q -W 16 -H 12 --exposure 1 --tonemap reinhard -o "$T/m.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "exposure and tonemap" 0 $?
+check_true "PNG Software" sh -c "grep -aq 'Softwareclwhitted [0-9]' '$T/m.png' || tr '\\0' ' ' <'$T/m.png' | grep -aq 'Software clwhitted [0-9]'"
+check_true "PNG Title is the scene" sh -c "tr '\\0' ' ' <'$T/m.png' | grep -aq 'Title default.json'"
+check_true "PNG Comment has the settings" sh -c "tr '\\0' ' ' <'$T/m.png' | grep -aq 'Comment 16x12, depth [0-9]*, spp 1, precision robust, exposure +1 EV, tonemap reinhard'"
+check_true "PNG Render Time" sh -c "tr '\\0' ' ' <'$T/m.png' | grep -aq 'Render Time [0-9.]* s'"
+"$BIN" -q -W 16 -H 12 -o "$T/f.exr" scenes/default.json >"$T/out" 2>"$T/err"; check "float EXR" 0 $?
+"$BIN" -q -W 16 -H 12 --half -o "$T/h.exr" scenes/default.json >"$T/out" 2>"$T/err"; check "half EXR" 0 $?
+check_true "half EXR is smaller" test "$(wc -c <"$T/h.exr")" -lt "$(wc -c <"$T/f.exr")"
+check_true "EXR software attribute" sh -c "tr '\\0' ' ' <'$T/h.exr' | grep -aq 'software string .*clwhitted [0-9]'"
+check_true "EXR comments: the settings" sh -c "tr '\\0' ' ' <'$T/h.exr' | grep -aq '16x12, depth [0-9]*, spp 1, precision robust, half floats'"
+check_true "EXR renderTime attribute" grep -aq renderTime "$T/h.exr"
+"$BIN" -W 16 -H 12 --exposure 1 -o "$T/w.exr" scenes/default.json >"$T/out" 2>"$T/err"
+check_grep "exposure on EXR warns" "warning: --exposure and --tonemap apply to PNG output only" "$T/err"
+"$BIN" -W 16 -H 12 --half -o "$T/w.png" scenes/default.json >"$T/out" 2>"$T/err"
+check_grep "half on PNG warns" "warning: --half applies to EXR output only" "$T/err"
+
 echo "cli.sh: $pass passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -919,6 +919,332 @@ static void test_write_diff(void **state)
     assert_int_equal(count_tmp_leftovers(), 0);
 }
 
+/* ------------------------------------------------------------------------------------ */
+/* Write options: exposure, tone mapping, half floats, metadata                         */
+
+static double ref_tonemap(double x, int tonemap)
+{
+    if (tonemap == IMAGE_TONEMAP_REINHARD)
+        x = x / (1.0 + x);
+    else if (tonemap == IMAGE_TONEMAP_ACES)
+        x = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
+    return x < 0 ? 0 : x > 1 ? 1 : x;
+}
+
+static void test_display_values(void **state)
+{
+    (void)state;
+    /* exposure: times 2^EV, then the curve */
+    assert_float_equal(image_display_value(0.25, 1.0, IMAGE_TONEMAP_CLAMP), 0.5, 1e-12);
+    assert_float_equal(image_display_value(1.0, -1.0, IMAGE_TONEMAP_CLAMP), 0.5, 1e-12);
+    assert_float_equal(image_display_value(0.3, 0.5, IMAGE_TONEMAP_CLAMP), 0.3 * sqrt(2.0), 1e-12);
+    assert_float_equal(image_display_value(2.0, 0.0, IMAGE_TONEMAP_CLAMP), 1.0, 0);
+    /* reinhard: c / (1 + c) */
+    assert_float_equal(image_display_value(1.0, 0.0, IMAGE_TONEMAP_REINHARD), 0.5, 1e-12);
+    assert_float_equal(image_display_value(3.0, 0.0, IMAGE_TONEMAP_REINHARD), 0.75, 1e-12);
+    assert_float_equal(image_display_value(1.5, 1.0, IMAGE_TONEMAP_REINHARD), 0.75, 1e-12);
+    assert_float_equal(image_display_value(1e30, 0.0, IMAGE_TONEMAP_REINHARD), 1.0, 1e-12);
+    /* aces: x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14), clamped */
+    assert_float_equal(image_display_value(1.0, 0.0, IMAGE_TONEMAP_ACES), 2.54 / 3.16, 1e-12);
+    assert_float_equal(image_display_value(0.18, 0.0, IMAGE_TONEMAP_ACES),
+                       0.18 * (2.51 * 0.18 + 0.03) / (0.18 * (2.43 * 0.18 + 0.59) + 0.14), 1e-12);
+    assert_float_equal(image_display_value(100.0, 0.0, IMAGE_TONEMAP_ACES), 1.0, 0);
+    /* every curve: NaN and negatives are 0, infinity is 1 */
+    for (int tm = IMAGE_TONEMAP_CLAMP; tm <= IMAGE_TONEMAP_ACES; tm++) {
+        assert_float_equal(image_display_value(NAN, 0.0, tm), 0.0, 0);
+        assert_float_equal(image_display_value(-1.0, 2.0, tm), 0.0, 0);
+        assert_float_equal(image_display_value(0.0, 2.0, tm), 0.0, 0);
+        assert_float_equal(image_display_value(INFINITY, 0.0, tm), 1.0, 0);
+    }
+    /* names */
+    assert_int_equal(image_tonemap_parse("clamp"), IMAGE_TONEMAP_CLAMP);
+    assert_int_equal(image_tonemap_parse("reinhard"), IMAGE_TONEMAP_REINHARD);
+    assert_int_equal(image_tonemap_parse("aces"), IMAGE_TONEMAP_ACES);
+    assert_int_equal(image_tonemap_parse("Reinhard"), -1);
+    assert_int_equal(image_tonemap_parse(""), -1);
+    assert_string_equal(image_tonemap_name(IMAGE_TONEMAP_REINHARD), "reinhard");
+    assert_string_equal(image_tonemap_name(IMAGE_TONEMAP_ACES), "aces");
+    assert_string_equal(image_tonemap_name(IMAGE_TONEMAP_CLAMP), "clamp");
+}
+
+/* The stored PNG bytes follow the formulas: round(255 * srgb(curve(x * 2^EV))). */
+static void test_png_exposure_tonemap(void **state)
+{
+    static const float values[] = {0.0f, 0.01f, 0.1f, 0.18f, 0.25f, 0.5f, 1.0f, 2.0f, 4.0f, 16.0f};
+    const int n = (int)(sizeof values / sizeof values[0]);
+    const double evs[] = {0.0, 1.0, -1.5};
+    char path[PATHLEN], err[512] = "";
+    image a, b, c;
+    image_write_opts o;
+    (void)state;
+
+    make_image(&a, n, 1);
+    for (int i = 0; i < n; i++)
+        set_px(&a, i, 0, values[i], values[i] * 0.5f, values[i] * 0.25f);
+    tpath(path, "tonemap.png");
+    for (int tm = IMAGE_TONEMAP_CLAMP; tm <= IMAGE_TONEMAP_ACES; tm++) {
+        for (size_t e = 0; e < sizeof evs / sizeof evs[0]; e++) {
+            image_write_opts_default(&o);
+            o.exposure = evs[e];
+            o.tonemap = tm;
+            assert_int_equal(image_write_ex(&a, path, &o, err, sizeof err), 0);
+            assert_int_equal(image_read_png(path, 0, &b, err, sizeof err), 0);
+            for (int i = 0; i < n * 3; i++) {
+                double want =
+                    floor(ref_encode(ref_tonemap(a.rgb[i] * pow(2.0, evs[e]), tm)) * 255.0 + 0.5);
+                if (fabs(b.rgb[i] * 255.0 - want) > 1e-3)
+                    fail_msg("tonemap %d, EV %g, value %g: stored %g, expected %g", tm, evs[e],
+                             (double)a.rgb[i], b.rgb[i] * 255.0, want);
+            }
+            image_free(&b);
+        }
+    }
+    /* the defaults are the plain writer's: clamp at exposure 0 */
+    tpath(path, "plain.png");
+    assert_int_equal(image_write(&a, path, err, sizeof err), 0);
+    assert_int_equal(image_read_png(path, 0, &b, err, sizeof err), 0);
+    tpath(path, "defaults.png");
+    assert_int_equal(image_write_ex(&a, path, NULL, err, sizeof err), 0);
+    assert_int_equal(image_read_png(path, 0, &c, err, sizeof err), 0);
+    assert_memory_equal(b.rgb, c.rgb, (size_t)n * 3 * sizeof(float));
+    image_free(&b);
+    image_free(&c);
+    /* EXR ignores exposure and tone mapping: the linear values stay */
+    image_write_opts_default(&o);
+    o.exposure = 3;
+    o.tonemap = IMAGE_TONEMAP_REINHARD;
+    tpath(path, "linear.exr");
+    assert_int_equal(image_write_ex(&a, path, &o, err, sizeof err), 0);
+    assert_int_equal(image_read_exr(path, &b, err, sizeof err), 0);
+    assert_memory_equal(a.rgb, b.rgb, (size_t)n * 3 * sizeof(float));
+    image_free(&b);
+    image_free(&a);
+}
+
+/* Pixel type of every channel of part 0. */
+static exr_pixel_type_t exr_channel_type(const char *path)
+{
+    exr_context_t ctx = NULL;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    const exr_attr_chlist_t *chl = NULL;
+    exr_pixel_type_t t;
+    assert_int_equal(exr_start_read(&ctx, path, &init), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_get_channels(ctx, 0, &chl), EXR_ERR_SUCCESS);
+    assert_int_equal(chl->num_channels, 3);
+    t = chl->entries[0].pixel_type;
+    for (int c = 1; c < chl->num_channels; c++)
+        assert_int_equal(chl->entries[c].pixel_type, t);
+    exr_finish(&ctx);
+    return t;
+}
+
+static void test_exr_half(void **state)
+{
+    /* value, and what it must read back as (rounded to nearest even half) */
+    static const struct {
+        float in, out;
+    } exact[] = {
+        {1.0f, 1.0f},
+        {-2.5f, -2.5f},
+        {0.1f, 0.0999755859375f},
+        {1.0f / 3.0f, 0.333251953125f},
+        {2049.0f, 2048.0f},                               /* tie: to the even 2048 */
+        {2051.0f, 2052.0f},                               /* tie: to the even 2052 */
+        {65504.0f, 65504.0f},                             /* the largest half */
+        {65519.0f, 65504.0f},                             /* below the tie with infinity */
+        {5.9604644775390625e-8f, 5.9604644775390625e-8f}, /* 2^-24: the smallest subnormal */
+        {2.98023223876953125e-8f, 0.0f},                  /* 2^-25: a tie, to the even 0 */
+        {4.470348358154297e-8f, 5.9604644775390625e-8f},  /* 1.5 * 2^-25: up */
+        {6.103515625e-5f, 6.103515625e-5f},               /* 2^-14: the smallest normal */
+        {0.0f, 0.0f},
+    };
+    const int ne = (int)(sizeof exact / sizeof exact[0]);
+    const int w = 29, h = 37; /* several chunks, the last partial */
+    char path[PATHLEN], err[512] = "";
+    image a, b;
+    image_write_opts o;
+    (void)state;
+
+    make_image(&a, w, h);
+    for (size_t i = 0; i < (size_t)w * h * 3; i++)
+        a.rgb[i] = (float)((double)(i * 7919 % 100003) / 1000.0 - 20.0); /* -20..80 */
+    for (int k = 0; k < ne; k++)
+        a.rgb[k] = exact[k].in;
+    a.rgb[ne] = 65520.0f; /* the tie with infinity: to infinity */
+    a.rgb[ne + 1] = 1e6f;
+    a.rgb[ne + 2] = -1e6f;
+    a.rgb[ne + 3] = NAN;
+    image_write_opts_default(&o);
+    o.half = 1;
+    tpath(path, "half.exr");
+    assert_int_equal(image_write_ex(&a, path, &o, err, sizeof err), 0);
+    assert_int_equal(exr_channel_type(path), EXR_PIXEL_HALF);
+    assert_int_equal(image_read_exr(path, &b, err, sizeof err), 0);
+    assert_int_equal(b.width, w);
+    assert_int_equal(b.height, h);
+    for (int k = 0; k < ne; k++)
+        if (b.rgb[k] != exact[k].out)
+            fail_msg("half of %.9g read back as %.9g, expected %.9g", (double)exact[k].in,
+                     (double)b.rgb[k], (double)exact[k].out);
+    assert_true(isinf(b.rgb[ne]) && b.rgb[ne] > 0);
+    assert_true(isinf(b.rgb[ne + 1]) && b.rgb[ne + 1] > 0);
+    assert_true(isinf(b.rgb[ne + 2]) && b.rgb[ne + 2] < 0);
+    assert_true(isnan(b.rgb[ne + 3]));
+    /* everything else within half precision: relative 2^-11 */
+    for (size_t i = (size_t)ne + 4; i < (size_t)w * h * 3; i++) {
+        double d = fabs((double)b.rgb[i] - (double)a.rgb[i]);
+        if (d > fabs((double)a.rgb[i]) / 2048.0 + 1e-7)
+            fail_msg("half round trip of %.9g: %.9g", (double)a.rgb[i], (double)b.rgb[i]);
+    }
+    image_free(&b);
+    /* without --half: floats */
+    tpath(path, "float.exr");
+    assert_int_equal(image_write_ex(&a, path, NULL, err, sizeof err), 0);
+    assert_int_equal(exr_channel_type(path), EXR_PIXEL_FLOAT);
+    image_free(&a);
+    assert_int_equal(count_tmp_leftovers(), 0);
+}
+
+static void fill_meta(image_write_opts *o)
+{
+    image_write_opts_default(o);
+    o->title = "tetra.nff";
+    o->software = "clwhitted 9.8.7";
+    o->source = "Some Device";
+    o->comment = "64x48, depth 5, spp 1, precision robust";
+    o->render_s = 1.5;
+}
+
+static void test_exr_metadata(void **state)
+{
+    static const char *const names[] = {"scene", "software", "device", "comments"};
+    char path[PATHLEN], err[512] = "";
+    image a;
+    image_write_opts o;
+    exr_context_t ctx = NULL;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    const char *v = NULL;
+    int32_t len = 0;
+    float f = 0;
+    (void)state;
+
+    make_image(&a, 4, 3);
+    fill_meta(&o);
+    o.half = 1;
+    tpath(path, "meta.exr");
+    assert_int_equal(image_write_ex(&a, path, &o, err, sizeof err), 0);
+    assert_int_equal(exr_start_read(&ctx, path, &init), EXR_ERR_SUCCESS);
+    const char *want[] = {o.title, o.software, o.source, o.comment};
+    for (int i = 0; i < 4; i++) {
+        v = NULL;
+        assert_int_equal(exr_attr_get_string(ctx, 0, names[i], &len, &v), EXR_ERR_SUCCESS);
+        assert_non_null(v);
+        assert_int_equal(len, (int32_t)strlen(want[i]));
+        assert_memory_equal(v, want[i], strlen(want[i]));
+    }
+    assert_int_equal(exr_attr_get_float(ctx, 0, "renderTime", &f), EXR_ERR_SUCCESS);
+    assert_true(f == 1.5f);
+    /* capDate "YYYY:MM:DD hh:mm:ss" and a utcOffset within a day */
+    assert_int_equal(exr_attr_get_string(ctx, 0, "capDate", &len, &v), EXR_ERR_SUCCESS);
+    assert_int_equal(len, 19);
+    assert_true(v[4] == ':' && v[7] == ':' && v[10] == ' ' && v[13] == ':' && v[16] == ':');
+    assert_int_equal(exr_attr_get_float(ctx, 0, "utcOffset", &f), EXR_ERR_SUCCESS);
+    assert_true(fabsf(f) <= 86400.0f);
+    exr_finish(&ctx);
+
+    /* no metadata asked for: none written */
+    tpath(path, "nometa.exr");
+    assert_int_equal(image_write(&a, path, err, sizeof err), 0);
+    assert_int_equal(exr_start_read(&ctx, path, &init), EXR_ERR_SUCCESS);
+    assert_int_not_equal(exr_attr_get_string(ctx, 0, "software", &len, &v), EXR_ERR_SUCCESS);
+    assert_int_not_equal(exr_attr_get_float(ctx, 0, "renderTime", &f), EXR_ERR_SUCCESS);
+    exr_finish(&ctx);
+    image_free(&a);
+}
+
+/* Reads the text chunks and tIME of a PNG with libpng; returns the number of chunks. */
+typedef struct {
+    char key[8][80], text[8][256];
+    int count, has_time;
+    png_time mtime;
+} png_texts;
+
+static void read_png_texts(const char *path, png_texts *out)
+{
+    FILE *f = fopen(path, "rb");
+    png_structp png;
+    png_infop info;
+    png_textp text = NULL;
+    png_timep t = NULL;
+    int n = 0;
+    assert_non_null(f);
+    png = png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    assert_non_null(png);
+    info = png_create_info_struct(png);
+    assert_non_null(info);
+    if (setjmp(png_jmpbuf(png)))
+        fail_msg("libpng error reading %s", path);
+    png_init_io(png, f);
+    png_read_png(png, info, PNG_TRANSFORM_IDENTITY, NULL);
+    memset(out, 0, sizeof *out);
+    png_get_text(png, info, &text, &n);
+    for (int i = 0; i < n && i < 8; i++) {
+        snprintf(out->key[i], sizeof out->key[i], "%s", text[i].key);
+        snprintf(out->text[i], sizeof out->text[i], "%s", text[i].text);
+    }
+    out->count = n;
+    if (png_get_tIME(png, info, &t) && t) {
+        out->has_time = 1;
+        out->mtime = *t;
+    }
+    png_destroy_read_struct(&png, &info, NULL);
+    fclose(f);
+}
+
+static const char *png_text_of(const png_texts *t, const char *key)
+{
+    for (int i = 0; i < t->count && i < 8; i++)
+        if (strcmp(t->key[i], key) == 0)
+            return t->text[i];
+    fail_msg("PNG text chunk '%s' missing", key);
+    return NULL;
+}
+
+static void test_png_metadata(void **state)
+{
+    char path[PATHLEN], err[512] = "";
+    image a;
+    image_write_opts o;
+    png_texts t;
+    const char *ct;
+    (void)state;
+
+    make_image(&a, 4, 3);
+    fill_meta(&o);
+    o.title = "caf\xc3\xa9.json"; /* UTF-8: an iTXt chunk */
+    tpath(path, "meta.png");
+    assert_int_equal(image_write_ex(&a, path, &o, err, sizeof err), 0);
+    read_png_texts(path, &t);
+    assert_string_equal(png_text_of(&t, "Title"), o.title);
+    assert_string_equal(png_text_of(&t, "Software"), "clwhitted 9.8.7");
+    assert_string_equal(png_text_of(&t, "Source"), "Some Device");
+    assert_string_equal(png_text_of(&t, "Comment"), o.comment);
+    assert_string_equal(png_text_of(&t, "Render Time"), "1.500 s");
+    ct = png_text_of(&t, "Creation Time"); /* ISO 8601, UTC: 2024-05-06T07:08:09Z */
+    assert_int_equal(strlen(ct), 20);
+    assert_true(ct[4] == '-' && ct[7] == '-' && ct[10] == 'T' && ct[19] == 'Z');
+    assert_true(t.has_time);
+    assert_true(t.mtime.year >= 2024 && t.mtime.month >= 1 && t.mtime.month <= 12);
+
+    /* no metadata asked for: only the creation time */
+    tpath(path, "nometa.png");
+    assert_int_equal(image_write(&a, path, err, sizeof err), 0);
+    read_png_texts(path, &t);
+    assert_int_equal(t.count, 1);
+    assert_string_equal(t.key[0], "Creation Time");
+    image_free(&a);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -933,6 +1259,11 @@ int main(void)
         cmocka_unit_test(test_write_is_atomic),
         cmocka_unit_test(test_compare),
         cmocka_unit_test(test_write_diff),
+        cmocka_unit_test(test_display_values),
+        cmocka_unit_test(test_png_exposure_tonemap),
+        cmocka_unit_test(test_exr_half),
+        cmocka_unit_test(test_exr_metadata),
+        cmocka_unit_test(test_png_metadata),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }
