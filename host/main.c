@@ -8,6 +8,7 @@
 #include <time.h>
 
 #include "image.h"
+#include "preview.h"
 #include "render.h"
 #include "scene.h"
 
@@ -36,6 +37,9 @@ static void usage(FILE *f)
             "      --device SPEC     OpenCL device: P:D (platform:device as --list-devices\n"
             "                        prints) or part of its name (default: the first CPU device)\n"
             "      --list-devices    list the OpenCL platforms and devices, then exit\n"
+            "      --preview         open a window that shows the render as it refines, with\n"
+            "                        camera controls (needs a display; press H in it for keys)\n"
+            "      --preview-script FILE  drive the preview from FILE (for tests)\n"
             "  -q, --quiet           print nothing but errors\n"
             "  -h, --help            show this help, then exit\n"
             "      --version         show the version, then exit\n"
@@ -98,6 +102,7 @@ static void warn_unrendered(const scene *s)
 int main(int argc, char **argv)
 {
     enum { OPT_DEVICE = 256, OPT_LIST, OPT_VERSION, OPT_SPP, OPT_PRECISION, OPT_SPD, OPT_STATS };
+    enum { OPT_PREVIEW = 300, OPT_PVS /* --preview-script */ };
     static const struct option longopts[] = {{"output", required_argument, NULL, 'o'},
                                              {"width", required_argument, NULL, 'W'},
                                              {"height", required_argument, NULL, 'H'},
@@ -108,6 +113,8 @@ int main(int argc, char **argv)
                                              {"spd", no_argument, NULL, OPT_SPD},
                                              {"stats", no_argument, NULL, OPT_STATS},
                                              {"list-devices", no_argument, NULL, OPT_LIST},
+                                             {"preview", no_argument, NULL, OPT_PREVIEW},
+                                             {"preview-script", required_argument, NULL, OPT_PVS},
                                              {"quiet", no_argument, NULL, 'q'},
                                              {"help", no_argument, NULL, 'h'},
                                              {"version", no_argument, NULL, OPT_VERSION},
@@ -122,6 +129,8 @@ int main(int argc, char **argv)
     double t0, t_load, t_setup, t_render;
     render_settings settings;
     render_stats st;
+    int preview = 0;
+    const char *preview_script = NULL;
 
     render_settings_default(&settings);
 
@@ -171,6 +180,12 @@ int main(int argc, char **argv)
         case OPT_LIST:
             list = 1;
             break;
+        case OPT_PREVIEW:
+            preview = 1;
+            break;
+        case OPT_PVS:
+            preview_script = optarg;
+            break;
         case 'q':
             quiet = 1;
             break;
@@ -207,6 +222,13 @@ int main(int argc, char **argv)
     if (scene_load(argv[optind], &s, err, sizeof err) != 0 ||
         scene_finish(&s, width, height, depth, err, sizeof err) != 0) {
         fprintf(stderr, "clwhitted: %s\n", err);
+        goto out_free_scene;
+    }
+    if (preview || preview_script) {
+        preview_options po = {device, settings, preview_script, quiet};
+        if (!quiet)
+            warn_unrendered(&s);
+        rc = preview_run(&s, &po);
         goto out_free_scene;
     }
     if (!output) {
