@@ -1363,10 +1363,11 @@ static void print_summary(const pv *p)
            since(a, sizeof a, p->t_open, p->t_start), since(b, sizeof b, p->t_ready, p->t_start),
            since(c, sizeof c, p->t_first, p->t_start), since(d, sizeof d, p->t_full, p->t_start),
            p->spp, since(e, sizeof e, p->t_done, p->t_start));
-    printf("clwhitted: preview: %ld batches, mean %.1f ms, max %.1f ms (target %.0f ms); %ld "
-           "view changes, first picture after each: mean %.1f ms, max %.1f ms\n",
+    printf("clwhitted: preview: %ld batches, mean %.1f ms, max %.1f ms (target %.0f ms); last "
+           "full-resolution sample %.1f ms; %ld view changes, first picture after each: mean "
+           "%.1f ms, max %.1f ms\n",
            p->batches, p->batches ? p->batch_sum / p->batches * 1e3 : 0.0, p->batch_max * 1e3,
-           PV_BATCH_S * 1e3, p->restart_firsts,
+           PV_BATCH_S * 1e3, p->frame_s * 1e3, p->restart_firsts,
            p->restart_firsts ? p->restart_first_sum / p->restart_firsts * 1e3 : 0.0,
            p->restart_first_max * 1e3);
 }
