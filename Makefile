@@ -25,7 +25,9 @@ CPPFLAGS += -D_POSIX_C_SOURCE=200809L -DCL_TARGET_OPENCL_VERSION=120 \
 PKG_CFLAGS = $(shell pkg-config --cflags libpng libcjson OpenEXR 2>/dev/null)
 EXR_CORE   = $(or $(filter -lOpenEXRCore%,$(shell pkg-config --libs OpenEXR 2>/dev/null)),-lOpenEXRCore)
 LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson 2>/dev/null) $(EXR_CORE) -lm
-CFLAGS  += $(WARN) $(OPT) $(PKG_CFLAGS)
+# --preview: GLFW and Xlib headers only; the libraries are loaded at run time (dlopen).
+GUI_CFLAGS = $(shell pkg-config --cflags glfw3 x11 2>/dev/null)
+CFLAGS  += $(WARN) $(OPT) $(PKG_CFLAGS) $(GUI_CFLAGS)
 
 KERNEL_SRC := kernels/compat.h kernels/types.h kernels/camera.h kernels/intersect.h kernels/bvh.h \
               kernels/shade.h kernels/clwhitted.cl

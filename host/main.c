@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "image.h"
+#include "preview.h"
 #include "progress.h"
 #include "render.h"
 #include "scene.h"
@@ -51,6 +52,9 @@ static void usage(FILE *f)
             "  -q, --quiet           print nothing but errors: no progress bar, summary or\n"
             "                        warnings (default: off)\n"
             "      --list-devices    list the OpenCL platforms and devices, then exit\n"
+            "      --preview         open a window that shows the render as it refines, with\n"
+            "                        camera controls (needs a display; press H in it for keys)\n"
+            "      --preview-script FILE  drive the preview from FILE (for tests)\n"
             "  -h, --help            show this help, then exit\n"
             "      --version         show the version, then exit\n"
             "\n"
@@ -163,6 +167,7 @@ int main(int argc, char **argv)
         OPT_TONEMAP,
         OPT_HALF
     };
+    enum { OPT_PREVIEW = 300, OPT_PVS /* --preview-script */ };
     static const struct option longopts[] = {{"output", required_argument, NULL, 'o'},
                                              {"width", required_argument, NULL, 'W'},
                                              {"height", required_argument, NULL, 'H'},
@@ -176,6 +181,8 @@ int main(int argc, char **argv)
                                              {"tonemap", required_argument, NULL, OPT_TONEMAP},
                                              {"half", no_argument, NULL, OPT_HALF},
                                              {"list-devices", no_argument, NULL, OPT_LIST},
+                                             {"preview", no_argument, NULL, OPT_PREVIEW},
+                                             {"preview-script", required_argument, NULL, OPT_PVS},
                                              {"quiet", no_argument, NULL, 'q'},
                                              {"help", no_argument, NULL, 'h'},
                                              {"version", no_argument, NULL, OPT_VERSION},
@@ -194,6 +201,8 @@ int main(int argc, char **argv)
     render_stats st;
     image_write_opts wopts;
     progress_bar bar;
+    int preview = 0;
+    const char *preview_script = NULL;
 
     render_settings_default(&settings);
     image_write_opts_default(&wopts);
@@ -262,6 +271,12 @@ int main(int argc, char **argv)
         case OPT_LIST:
             list = 1;
             break;
+        case OPT_PREVIEW:
+            preview = 1;
+            break;
+        case OPT_PVS:
+            preview_script = optarg;
+            break;
         case 'q':
             quiet = 1;
             break;
@@ -304,6 +319,11 @@ int main(int argc, char **argv)
         goto out_free_scene;
     }
     progress_clear(&bar);
+    if (preview || preview_script) {
+        preview_options po = {device, settings, preview_script, quiet};
+        rc = preview_run(&s, &po);
+        goto out_free_scene;
+    }
     if (!output) {
         default_out = default_output(&s);
         if (!default_out) {
