@@ -141,8 +141,12 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
                     return 1;
             }
         } else {
-            stack[sp++] = nd->start;
-            stack[sp++] = node + 1;
+            /* the child on the side the ray starts from first: near blockers end it soonest */
+            int axis = -nd->count;
+            float da = axis == 0 ? ri.d.x : (axis == 1 ? ri.d.y : ri.d.z);
+            int near = da >= 0.0f ? node + 1 : nd->start;
+            stack[sp++] = da >= 0.0f ? nd->start : node + 1;
+            stack[sp++] = near;
         }
     }
     return 0;

@@ -66,6 +66,7 @@ CW_INLINE vec3 v3_norm(vec3 a)
 #define cw_exp2(a) exp2(a)
 #define cw_log2(a) log2(a)
 #define cw_atomic_inc(p) atomic_inc(p)
+#define cw_atomic_add_int(p, v) atomic_add((p), (v))
 #define cw_nextafter(a, b) nextafter((a), (b))
 #define cw_copysign(a, b) copysign((a), (b))
 #define CW_INFINITY INFINITY
@@ -166,6 +167,12 @@ CW_INLINE vec3 v3_norm(vec3 a)
 #define cw_exp2(a) exp2f(a)
 #define cw_log2(a) log2f(a)
 #define cw_atomic_inc(p) ((*(p))++)
+CW_INLINE int cw_atomic_add_int(int *p, int v)
+{
+    int old = *p;
+    *p += v;
+    return old;
+}
 #define cw_nextafter(a, b) nextafterf((a), (b))
 #define cw_copysign(a, b) copysignf((a), (b))
 #define CW_INFINITY INFINITY

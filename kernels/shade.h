@@ -157,7 +157,7 @@ CW_INLINE int shade_material(const cw_world *w, cw_hit hit)
     return w->cones[hit.index].material;
 }
 
-/* Adds c to pixel's rgb; several rays of one pixel may do it at once. */
+/* Adds c to pixel's rgb when several work-items may add to the same pixel at once. */
 CW_INLINE void shade_add(CW_GLOBAL float *image, int pixel, vec3 c)
 {
     if (c.x != 0.0f)
@@ -168,15 +168,28 @@ CW_INLINE void shade_add(CW_GLOBAL float *image, int pixel, vec3 c)
         cw_atomic_add(&image[4 * pixel + 2], c.z);
 }
 
+/* Adds c to pixel's rgb from the shade kernel. Without refraction a level holds at most
+ * one ray per pixel, so a plain add is safe there; with it, a ray's refracted and
+ * reflected children share the pixel. */
+CW_INLINE void shade_add_local(CW_GLOBAL float *image, int pixel, vec3 c)
+{
+#if CW_HAS_REFRACTION
+    shade_add(image, pixel, c);
+#else
+    image[4 * pixel + 0] += c.x;
+    image[4 * pixel + 1] += c.y;
+    image[4 * pixel + 2] += c.z;
+#endif
+}
+
 CW_INLINE int shade_nonzero(vec3 c)
 {
     return c.x > 0.0f || c.y > 0.0f || c.z > 0.0f;
 }
 
-CW_INLINE void shade_push_ray(CW_GLOBAL cw_ray *out, CW_GLOBAL int *counters, vec3 o, vec3 d,
-                              vec3 weight, const cw_ray *parent, int skip)
+CW_INLINE void shade_put_ray(CW_GLOBAL cw_ray *out, int slot, vec3 o, vec3 d, vec3 weight,
+                             const cw_ray *parent, int skip)
 {
-    int slot = cw_atomic_inc(&counters[CW_COUNT_RAYS]);
     cw_ray r;
     r.origin = v4_from3(o, 0.0f);
     r.dir = v4_from3(d, 0.0f);
@@ -188,7 +201,8 @@ CW_INLINE void shade_push_ray(CW_GLOBAL cw_ray *out, CW_GLOBAL int *counters, ve
     out[slot] = r;
 }
 
-/* Shades *ray at hit (see the file comment). A miss adds the background. */
+/* Shades *ray at hit (see the file comment). A miss adds the background. Each ray
+ * reserves its queue slots with one atomic add per queue (not one per shadow ray). */
 CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
                          CW_GLOBAL const cw_light *lights, CW_GLOBAL const cw_material *materials,
                          const cw_ray *ray, cw_hit hit, CW_GLOBAL float *image,
@@ -199,12 +213,12 @@ CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
     vec3 d = v3_from4(ray->dir);
     vec3 n, ka, kd, ks, km, kt;
     float phong;
-    int k;
+    int k, count, slot;
     cw_surface s;
     CW_GLOBAL const cw_material *m;
 
     if (hit.kind == CW_PRIM_NONE) {
-        shade_add(image, ray->pixel, v3_mul(weight, v3_from4(f->background)));
+        shade_add_local(image, ray->pixel, v3_mul(weight, v3_from4(f->background)));
         return;
     }
     s = shade_surface(w, hit, v3_from4(ray->origin), d);
@@ -218,43 +232,45 @@ CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
     kt = v3_from4(m->kt);
     phong = m->ka.w;
 
-    shade_add(image, ray->pixel, v3_mul(weight, v3_mul(ka, v3_from4(f->ambient))));
-    for (k = 0; k < f->num_lights; k++) {
+    shade_add_local(image, ray->pixel, v3_mul(weight, v3_mul(ka, v3_from4(f->ambient))));
+    /* a shadow ray for each light the surface faces (n.l > 0): count, reserve, write */
+    count = 0;
+    for (k = 0; k < f->num_lights; k++)
+        if (v3_dot(n, v3_sub(v3_from4(lights[k].position), s.p)) > 0.0f)
+            count++;
+    slot = count > 0 ? cw_atomic_add_int(&counters[CW_COUNT_SHADOWS], count) : 0;
+    for (k = 0; k < f->num_lights && count > 0; k++) {
         vec3 lp = v3_from4(lights[k].position);
         vec3 to_light = v3_sub(lp, s.p);
         float dist = v3_len(to_light);
         vec3 l, h, c, o;
         float ndl, ndh;
-        int slot;
         cw_shadow_ray sr;
 
-        if (!(dist > 0.0f))
+        if (!(v3_dot(n, to_light) > 0.0f)) /* facing away: no contribution, no shadow ray */
             continue;
         l = v3_scale(to_light, 1.0f / dist);
-        ndl = v3_dot(n, l);
-        if (ndl <= 0.0f) /* facing away: no contribution and no shadow ray */
-            continue;
+        ndl = cw_fmax(v3_dot(n, l), 0.0f);
         h = v3_norm(v3_sub(l, d));
         ndh = cw_fmax(0.0f, v3_dot(n, h));
         c = v3_mul(v3_add(v3_scale(kd, ndl), v3_scale(ks, shade_pow(ndh, phong))),
                    v3_mul(weight, v3_from4(lights[k].intensity)));
         o = shade_spawn(&s, l);
-        slot = cw_atomic_inc(&counters[CW_COUNT_SHADOWS]);
         sr.origin = v4_from3(o, v3_len(v3_sub(lp, o)));
         sr.dir = v4_from3(l, 0.0f);
         sr.color = v4_from3(c, 0.0f);
         sr.pixel = ray->pixel;
         sr.skip = s.flat;
         sr.pad0 = sr.pad1 = 0;
-        shadows[slot] = sr;
+        shadows[slot++] = sr;
     }
 
     if (ray->depth >= f->max_depth)
         return;
 #if CW_HAS_MIRRORS || CW_HAS_REFRACTION
     {
-        vec3 refl_weight = km;
-        int reflect = shade_nonzero(km);
+        vec3 refl_weight = km, td = v3(0.0f, 0.0f, 0.0f);
+        int reflect = shade_nonzero(km), refract = 0;
 #if CW_HAS_REFRACTION
         if (shade_nonzero(kt)) {
             /* inside or outside from the geometric normal's side; shading stays two-sided */
@@ -269,16 +285,21 @@ CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
                 refl_weight = v3_add(refl_weight, kt);
                 reflect = 1;
             } else {
-                vec3 td = v3_norm(v3_add(v3_scale(d, eta), v3_scale(n, eta * cosi - cw_sqrt(k2))));
-                shade_push_ray(out, counters, shade_spawn(&s, td), td, v3_mul(weight, kt), ray,
-                               s.flat);
+                td = v3_norm(v3_add(v3_scale(d, eta), v3_scale(n, eta * cosi - cw_sqrt(k2))));
+                refract = 1;
             }
         }
 #endif
-        if (reflect) {
-            vec3 r = v3_norm(v3_sub(d, v3_scale(n, 2.0f * v3_dot(d, n))));
-            shade_push_ray(out, counters, shade_spawn(&s, r), r, v3_mul(weight, refl_weight), ray,
-                           s.flat);
+        if (reflect + refract > 0) {
+            slot = cw_atomic_add_int(&counters[CW_COUNT_RAYS], reflect + refract);
+            if (refract)
+                shade_put_ray(out, slot++, shade_spawn(&s, td), td, v3_mul(weight, kt), ray,
+                              s.flat);
+            if (reflect) {
+                vec3 r = v3_norm(v3_sub(d, v3_scale(n, 2.0f * v3_dot(d, n))));
+                shade_put_ray(out, slot, shade_spawn(&s, r), r, v3_mul(weight, refl_weight), ray,
+                              s.flat);
+            }
         }
     }
 #endif
