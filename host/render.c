@@ -1426,3 +1426,8 @@ out_free:
     free(px);
     return rc;
 }
+
+const char *renderer_build_options(const renderer *r)
+{
+    return r->options;
+}

@@ -91,5 +91,7 @@ int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, cha
  * sets blocked[i] to 1 when something lies on ray i, else 0. */
 int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocked, char *err,
                       size_t errlen);
+/* For tests: the build options of the kernel program built last ("" before any build). */
+const char *renderer_build_options(const renderer *r);
 
 #endif
