@@ -37,7 +37,7 @@ TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(patsubst tests/%.c,$(BUILD)/%,$(TEST_SRC))
 DEFAULT_SCENE := scenes/default.json
 
-.PHONY: all render test clean deps format format-check install uninstall gallery
+.PHONY: all render test clean deps format format-check install uninstall gallery bench spd-counts
 all: $(BUILD)/clwhitted $(BUILD)/scene2pov
 
 $(BUILD):
@@ -96,6 +96,14 @@ gallery: $(BUILD)/clwhitted
 	SPD_DIR='$(SPD_DIR)' sh tools/gallery $(BUILD)/clwhitted
 
 FORMAT_SRC = host/*.c host/*.h tests/*.c tests/*.h tools/*.c
+
+# Speed against POV-Ray on the SPD scenes (tools/bench --help); not part of make test.
+bench: $(BUILD)/clwhitted $(BUILD)/scene2pov
+	tools/bench $(BENCH_ARGS)
+
+# SPD ray counts against POV-Ray tracing the same corner rays.
+spd-counts: $(BUILD)/clwhitted $(BUILD)/scene2pov
+	tools/spd-counts $(SPD_COUNTS_ARGS)
 
 format:
 	clang-format -i $(FORMAT_SRC)
