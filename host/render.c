@@ -600,6 +600,8 @@ static int convert_scene(const scene *s, device_scene *ds, scene_features *ft, c
     }
     for (i = 0; i < s->triangles.count; i++) {
         const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
+        if (scene_triangle_degenerate(st))
+            continue; /* no area, no normal */
         cw_triangle *t = &ds->tri[ds->ntri];
         bvh_box b;
         box_empty(&b);

@@ -433,3 +433,11 @@ int scene_load(const char *path, scene *s, char *err, size_t errlen)
     snprintf(err, errlen, "%s: unknown scene format (expected a .nff or .json file)", path);
     return -1;
 }
+
+int scene_triangle_degenerate(const scene_triangle *t)
+{
+    float e1x = t->p[1].x - t->p[0].x, e1y = t->p[1].y - t->p[0].y, e1z = t->p[1].z - t->p[0].z;
+    float e2x = t->p[2].x - t->p[0].x, e2y = t->p[2].y - t->p[0].y, e2z = t->p[2].z - t->p[0].z;
+    float cx = e1y * e2z - e1z * e2y, cy = e1z * e2x - e1x * e2z, cz = e1x * e2y - e1y * e2x;
+    return cx == 0.0f && cy == 0.0f && cz == 0.0f;
+}

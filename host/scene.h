@@ -136,6 +136,11 @@ int json_scene_load(const char *path, scene *s, char *err, size_t errlen);
 int json_scene_parse(const char *text, size_t len, const char *name, scene *s, char *err,
                      size_t errlen);
 
+/* 1 when the triangle has no area in float arithmetic: the cross product of its edges, as
+ * the kernels compute it, is exactly zero (coincident or collinear vertices). Such a
+ * triangle has no normal and is left out of rendering. */
+int scene_triangle_degenerate(const scene_triangle *t);
+
 /* Vector helpers shared by readers and the camera set-up. */
 vec3f vec3f_make(float x, float y, float z);
 vec3f vec3f_sub(vec3f a, vec3f b);

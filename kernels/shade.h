@@ -47,7 +47,9 @@ CW_INLINE cw_surface shade_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d
         s.ng = n;
 #if !CW_FAST
         p = v3_add(c, v3_scale(n, sp->center.w));
-        s.err = v3_scale(v3_add(shade_abs(c), shade_abs(p)), CW_GAMMA(6));
+        /* c is exact input: the error is that of r n (normalisation) and of the sum */
+        s.err = v3_add(v3_scale(shade_abs(p), CW_GAMMA(2)),
+                       v3_scale(v3(1.0f, 1.0f, 1.0f), CW_GAMMA(6) * sp->center.w));
 #endif
     } else if (hit.kind == CW_PRIM_TRIANGLE) {
         CW_GLOBAL const cw_triangle *t = &w->triangles[hit.index];

@@ -407,6 +407,8 @@ static void host_world_init(host_world *hw, const scene *s)
     }
     for (i = 0; i < s->triangles.count; i++) {
         const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
+        if (scene_triangle_degenerate(st))
+            continue; /* no area, no normal */
         cw_triangle *t = &hw->tri[hw->ntri++];
         t->p0 = f4(st->p[0], 0);
         t->p1 = f4(st->p[1], 0);

@@ -339,6 +339,8 @@ static void host_convert(const scene *s, host_prims *h)
     }
     for (i = 0; i < s->triangles.count; i++) {
         const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
+        if (scene_triangle_degenerate(st))
+            continue; /* no area, no normal */
         cw_triangle *t = &h->tri[h->ntri++];
         t->p0 = f4(st->p[0], 0);
         t->p1 = f4(st->p[1], 0);
