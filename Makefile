@@ -113,3 +113,28 @@ format-check:
 
 clean:
 	rm -rf $(BUILD)
+
+# ---- Portability check (tools/portability-check; README, "Portability check") ----------
+# build/imgcmp compares images under the check's tolerance; build/cldevices lists the
+# OpenCL devices with their limits; build/oclgrind-fill-shim.so works around an Oclgrind
+# false positive in its uninitialised-value check.
+#   make portability                       every device and scene (tools/portability-check)
+#   make portability PORTABILITY_ARGS=--ci  small images, as CI runs it
+PORTABILITY_TOOLS := $(BUILD)/imgcmp $(BUILD)/cldevices $(BUILD)/oclgrind-fill-shim.so
+PORTABILITY_ARGS ?=
+
+.PHONY: portability portability-tools
+portability-tools: $(BUILD)/clwhitted $(PORTABILITY_TOOLS)
+
+$(BUILD)/imgcmp: tools/imgcmp.c $(LIB_OBJ) host/image.h
+	$(CC) $(CPPFLAGS) $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -o $@
+
+$(BUILD)/cldevices: tools/cldevices.c | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $< -lOpenCL -o $@
+
+$(BUILD)/oclgrind-fill-shim.so: tools/oclgrind-fill-shim.c | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -shared $< -o $@
+
+portability: portability-tools
+	bash tools/portability-check --self-test
+	bash tools/portability-check $(PORTABILITY_ARGS)
