@@ -46,7 +46,8 @@ CW_INLINE void bvh_test_ref(const cw_world *w, int ref, const cw_rayinfo *ri, fl
 }
 
 /* Closest hit in (tmin, tmax), never the primitive skip - 1 (skip = 0: none). */
-CW_INLINE cw_hit bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax, int skip)
+CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax, int skip,
+                           CW_GLOBAL cw_hit *out)
 {
     cw_hit hit;
     cw_rayinfo ri = isect_rayinfo(o, d);
@@ -61,8 +62,10 @@ CW_INLINE cw_hit bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, floa
     hit.kind = CW_PRIM_NONE;
     hit.index = -1;
     hit.pad0 = hit.pad1 = hit.pad2 = 0;
-    if (w->num_nodes == 0 || isect_box(&w->nodes[0], &ri, tmin, t_best) == CW_MISS)
-        return hit;
+    if (w->num_nodes == 0 || isect_box(&w->nodes[0], &ri, tmin, t_best) == CW_MISS) {
+        *out = hit;
+        return;
+    }
     for (;;) {
         CW_GLOBAL const cw_bvh_node *nd = &w->nodes[node];
         if (nd->count > 0) {
@@ -101,8 +104,10 @@ CW_INLINE cw_hit bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, floa
         }
         /* pop the next node still nearer than the closest hit */
         for (;;) {
-            if (sp == 0)
-                return hit;
+            if (sp == 0) {
+                *out = hit;
+                return;
+            }
             sp--;
             if (stack_t[sp] <= t_best)
                 break;

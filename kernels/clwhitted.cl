@@ -13,9 +13,6 @@
     ~1
 #error "feature flags CW_HAS_*, CW_FAST and CW_STATS must be 0 or 1"
 #endif
-#if CW_FAST && !defined(__FAST_RELAXED_MATH__)
-#error "CW_FAST=1 is built with -cl-fast-relaxed-math"
-#endif
 #if !CW_FAST && defined(__FAST_RELAXED_MATH__)
 #error "the robust path (CW_FAST=0) must not be built with -cl-fast-relaxed-math"
 #endif
@@ -66,8 +63,8 @@ __kernel void cw_intersect(CW_WORLD_ARGS, __global const cw_ray *rays, __global 
         return;
     ray = rays[gid];
     CW_MAKE_WORLD(w);
-    hit = bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, CW_FAR, ray.skip);
-    hits[gid] = hit;
+    bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, CW_FAR, ray.skip, &hits[gid]);
+    hit = hits[gid];
 #if CW_STATS
     if (hit.kind != CW_PRIM_NONE)
         atomic_inc(&counters[ray.depth == 1 ? CW_COUNT_EYE_HITS : CW_COUNT_SECONDARY_HITS]);

@@ -76,17 +76,22 @@ CW_INLINE vec3 v3_norm(vec3 a)
 #pragma OPENCL FP_CONTRACT OFF
 
 /* Atomic float add through compare-and-swap on the bits (OpenCL 1.2 has no float
- * atomics). */
+ * atomics). Every access to *p is atomic (a plain first read would race with another
+ * work-item's swap): the first swap, expecting 0, reads the current value. */
 CW_INLINE void cw_atomic_add(volatile __global float *p, float v)
 {
+    volatile __global unsigned int *u = (volatile __global unsigned int *)p;
     union {
         unsigned int u;
         float f;
     } old, upd;
-    do {
-        old.f = *p;
+    unsigned int prev;
+    old.u = 0u;
+    upd.f = v;
+    while ((prev = atomic_cmpxchg(u, old.u, upd.u)) != old.u) {
+        old.u = prev;
         upd.f = old.f + v;
-    } while (atomic_cmpxchg((volatile __global unsigned int *)p, old.u, upd.u) != old.u);
+    }
 }
 
 #else /* host C99 */
