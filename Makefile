@@ -69,6 +69,7 @@ test: $(BUILD)/clwhitted $(TEST_BIN)
 	    echo "== $$t"; $$t || fail=1; \
 	done; \
 	sh tests/cli.sh $(BUILD)/clwhitted || fail=1; \
+	sh tests/quality.sh $(BUILD)/clwhitted $(BUILD)/imgtool || fail=1; \
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
 
 format:
@@ -79,3 +80,21 @@ format-check:
 
 clean:
 	rm -rf $(BUILD)
+
+# --- Speed against error (tools/quality-report) ---
+# build/imgtool: image conversions for the report (EXR to raw float32). `make quality` runs
+# the report on three SPD scenes (they live outside the repository: QUALITY_SCENES) and
+# writes the README figure to docs/quality/.
+QUALITY_SCENES ?= ../shared/scenes/spd/tetra.nff ../shared/scenes/spd/balls.nff \
+                  ../shared/scenes/spd/teapot.nff
+QUALITY_ARGS   ?=
+.PHONY: quality
+all: $(BUILD)/imgtool
+test: $(BUILD)/imgtool
+
+$(BUILD)/imgtool: tools/imgtool.c $(LIB_OBJ)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -o $@
+
+quality: $(BUILD)/clwhitted $(BUILD)/imgtool
+	tools/quality-report --figure docs/quality/quality.png --table docs/quality/quality.md \
+	    $(QUALITY_ARGS) $(QUALITY_SCENES)
