@@ -83,8 +83,9 @@ clean:
 
 # --- Speed against error (tools/quality-report) ---
 # build/imgtool: image conversions for the report (EXR to raw float32). `make quality` runs
-# the report on three SPD scenes (they live outside the repository: QUALITY_SCENES) and
-# writes the README figure to docs/quality/.
+# the report on three SPD scenes (they live outside the repository: QUALITY_SCENES), writes
+# the figure and the tables to docs/quality/ and the README's table (about 20 minutes on two
+# cores). QUALITY_ARGS="--replot" redoes the outputs from the last run without rendering.
 QUALITY_SCENES ?= ../shared/scenes/spd/tetra.nff ../shared/scenes/spd/balls.nff \
                   ../shared/scenes/spd/teapot.nff
 QUALITY_ARGS   ?=
@@ -97,4 +98,4 @@ $(BUILD)/imgtool: tools/imgtool.c $(LIB_OBJ)
 
 quality: $(BUILD)/clwhitted $(BUILD)/imgtool
 	tools/quality-report --figure docs/quality/quality.png --table docs/quality/quality.md \
-	    $(QUALITY_ARGS) $(QUALITY_SCENES)
+	    --readme README.md $(QUALITY_ARGS) $(QUALITY_SCENES)
