@@ -80,6 +80,7 @@ test: $(BUILD)/clwhitted $(TEST_BIN)
 	sh tests/cli.sh $(BUILD)/clwhitted || fail=1; \
 	sh tests/install.sh || fail=1; \
 	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \
+	sh tests/quality.sh $(BUILD)/clwhitted $(BUILD)/imgtool || fail=1; \
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
 
 # The installed binary needs nothing else at run time: the kernels are embedded.
@@ -138,3 +139,22 @@ $(BUILD)/oclgrind-fill-shim.so: tools/oclgrind-fill-shim.c | $(BUILD)
 portability: portability-tools
 	bash tools/portability-check --self-test
 	bash tools/portability-check $(PORTABILITY_ARGS)
+
+# --- Speed against error (tools/quality-report) ---
+# build/imgtool: image conversions for the report (EXR to raw float32). `make quality` runs
+# the report on three SPD scenes (they live outside the repository: QUALITY_SCENES), writes
+# the figure and the tables to docs/quality/ and the README's table (about 20 minutes on two
+# cores). QUALITY_ARGS="--replot" redoes the outputs from the last run without rendering.
+QUALITY_SCENES ?= ../shared/scenes/spd/tetra.nff ../shared/scenes/spd/balls.nff \
+                  ../shared/scenes/spd/teapot.nff
+QUALITY_ARGS   ?=
+.PHONY: quality
+all: $(BUILD)/imgtool
+test: $(BUILD)/imgtool
+
+$(BUILD)/imgtool: tools/imgtool.c $(LIB_OBJ)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -o $@
+
+quality: $(BUILD)/clwhitted $(BUILD)/imgtool
+	tools/quality-report --figure docs/quality/quality.png --table docs/quality/quality.md \
+	    --readme README.md $(QUALITY_ARGS) $(QUALITY_SCENES)
