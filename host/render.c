@@ -12,6 +12,7 @@
 #include <CL/cl.h>
 
 #include "bvh.h"
+#include "intersect.h"
 #include "clerr.h"
 
 static double seconds_now(void)
@@ -639,6 +640,13 @@ static int convert_scene(const scene *s, device_scene *ds, scene_features *ft, c
         pg->count = sp->count;
         pg->material = sp->material;
         pg->axis = axis;
+        { /* the kernels read the vertices projected along the dominant axis */
+            int pj;
+            for (pj = 0; pj < sp->count; pj++) {
+                vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
+                ds->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
+            }
+        }
         box_empty(&b);
         for (j = 0; j < sp->count; j++)
             box_add(&b, v[j].x, v[j].y, v[j].z);

@@ -228,14 +228,30 @@ CW_INLINE void isect_project(vec3 p, int axis, float *a, float *b)
     }
 }
 
+/* A polygon vertex as the kernels store it: its 2-D coordinates in the polygon's plane
+ * projected along the dominant normal axis (that axis dropped), in x and y. The host
+ * stores them so; the intersection test then needs no projection per edge. */
+CW_INLINE cw_float4 isect_polygon_vertex(vec3 p, int axis)
+{
+    float a, b;
+    cw_float4 r;
+    isect_project(p, axis, &a, &b);
+    r.x = a;
+    r.y = b;
+    r.z = 0.0f;
+    r.w = 0.0f;
+    return r;
+}
+
 /* Ray-polygon (4.4.3): hit the plane, then the even-odd crossing test in the plane
- * projected along the dominant normal axis, which is right for non-convex polygons. */
+ * projected along the dominant normal axis, which is right for non-convex polygons.
+ * verts: projected vertices (isect_polygon_vertex). */
 CW_INLINE int isect_polygon(CW_GLOBAL const cw_polygon *pg, CW_GLOBAL const cw_float4 *verts,
                             vec3 o, vec3 d, float tmin, float tmax, float *t_out)
 {
     vec3 n = v3_from4(pg->plane);
     float dn = v3_dot(n, d);
-    float t, pa, pb, ax, ay, bx, by;
+    float t, pa, pb, ax, ay;
     int inside = 0, k, first = pg->first, count = pg->count;
 
     if (dn == 0.0f)
@@ -244,13 +260,15 @@ CW_INLINE int isect_polygon(CW_GLOBAL const cw_polygon *pg, CW_GLOBAL const cw_f
     if (!(t > tmin && t < tmax))
         return 0;
     isect_project(v3_add(o, v3_scale(d, t)), pg->axis, &pa, &pb);
-    isect_project(v3_from4(verts[first + count - 1]), pg->axis, &ax, &ay);
-    for (k = 0; k < count; k++) {
-        isect_project(v3_from4(verts[first + k]), pg->axis, &bx, &by);
-        /* edge (a, b) crosses the horizontal line through the point, right of it */
+    ax = verts[first + count - 1].x;
+    ay = verts[first + count - 1].y;
+    for (k = first; k < first + count; k++) {
+        float bx = verts[k].x, by = verts[k].y;
+        /* edge (a, b) crosses the horizontal line through the point, right of it:
+         * pa < ax + (pb - ay)(bx - ax)/(by - ay), without the division */
         if ((ay > pb) != (by > pb)) {
-            float x = ax + (pb - ay) * (bx - ax) / (by - ay);
-            if (pa < x)
+            float lhs = (pa - ax) * (by - ay), rhs = (pb - ay) * (bx - ax);
+            if (by > ay ? lhs < rhs : lhs > rhs)
                 inside = !inside;
         }
         ax = bx;

@@ -439,6 +439,13 @@ static void host_world_init(host_world *hw, const scene *s)
         pg->count = sp->count;
         pg->material = sp->material;
         pg->axis = axis;
+        { /* the kernels read the vertices projected along the dominant axis */
+            int pj;
+            for (pj = 0; pj < sp->count; pj++) {
+                vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
+                hw->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
+            }
+        }
         hw->npg++;
     }
     for (i = 0; i < s->cones.count; i++) {

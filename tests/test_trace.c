@@ -368,6 +368,13 @@ static void host_convert(const scene *s, host_prims *h)
         pg->count = sp->count;
         pg->material = sp->material;
         pg->axis = axis;
+        { /* the kernels read the vertices projected along the dominant axis */
+            int pj;
+            for (pj = 0; pj < sp->count; pj++) {
+                vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
+                h->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
+            }
+        }
         h->npg++;
     }
     for (i = 0; i < s->cones.count; i++) {
