@@ -1317,7 +1317,9 @@ static void test_bad_files(void **state)
     scene_free(&s);
     /* a read error after a successful open (as root too): /proc/self/mem at address 0 */
     scene_init(&s);
-    if (nff_load("/proc/self/mem", &s, err, sizeof err) == -1)
+    if (access("/proc/self/mem", F_OK) != 0)
+        print_message("no /proc/self/mem: the read error is not tested\n");
+    else if (nff_load("/proc/self/mem", &s, err, sizeof err) == -1)
         assert_non_null(strstr(err, "/proc/self/mem: cannot read: "));
     else
         fail_msg("/proc/self/mem was read");
