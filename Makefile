@@ -113,7 +113,7 @@ format-check:
 	clang-format --dry-run -Werror $(FORMAT_SRC)
 
 clean:
-	rm -rf $(BUILD)
+	rm -rf $(BUILD) build-asan build-fuzz
 
 # ---- Portability check (tools/portability-check; README, "Portability check") ----------
 # build/imgcmp compares images under the check's tolerance; build/cldevices lists the
@@ -158,3 +158,72 @@ $(BUILD)/imgtool: tools/imgtool.c $(LIB_OBJ)
 quality: $(BUILD)/clwhitted $(BUILD)/imgtool
 	tools/quality-report --figure docs/quality/quality.png --table docs/quality/quality.md \
 	    --readme README.md $(QUALITY_ARGS) $(QUALITY_SCENES)
+
+# ---- Robustness: fuzzing and the sanitizer build ----------------------------------------------
+#   make fuzz [FUZZ_SECONDS=60]  builds a libFuzzer target per scene reader (clang,
+#       -fsanitize=fuzzer,address,undefined) into build-fuzz/ and runs each for FUZZ_SECONDS,
+#       one after the other; a crash, leak, hang, huge allocation or broken error message
+#       (tests/fuzz/fuzz_check.h) fails, leaving the input in build-fuzz/artifacts/TARGET/.
+#       Copy it into tests/fuzz/regressions/TARGET/: build/test_fuzzcorpus replays those.
+#   make asan  builds everything into build-asan/ with AddressSanitizer, LeakSanitizer and
+#       UndefinedBehaviorSanitizer (no recovery) and runs the whole test suite there; leaks
+#       inside the OpenCL stack are suppressed by tests/lsan.supp (third-party libraries only).
+FUZZ_CC      ?= clang
+FUZZ_BUILD   := build-fuzz
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS := nff json
+FUZZ_CFLAGS  := -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined \
+                -fno-sanitize-recover=all
+FUZZ_SRC     := host/scene.c host/nff.c host/scene_json.c
+# Inputs up to 64 KiB (larger seeds, such as the SPD scenes, are cut there); 10 s per input
+# is a hang; one allocation over 256 MiB or 2 GiB in all is a failure.
+FUZZ_OPTS    := -max_len=65536 -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=256 \
+                -print_final_stats=1
+# Seeds beyond tests/fuzz/corpus/TARGET: the scenes in the repository, and the SPD scenes in
+# ../shared when present (CI clones have none).
+FUZZ_SEEDS_nff  = scenes/spd/*.nff tests/scenes/pov/*.nff tests/scenes/parse/*.nff \
+                  $(wildcard ../shared/scenes/spd/*.nff)
+FUZZ_SEEDS_json = scenes/*.json tests/scenes/parse/*.json
+
+ASAN_CC      ?= clang
+ASAN_BUILD   := build-asan
+ASAN_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined \
+                -fno-sanitize-recover=all
+ASAN_ENV     := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
+                LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
+                UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+.PHONY: fuzz fuzz-build asan
+$(BUILD)/test_fuzzcorpus: tests/fuzz/fuzz_check.h
+
+$(FUZZ_BUILD)/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz_check.h $(FUZZ_SRC) host/scene.h
+	@mkdir -p $(FUZZ_BUILD)
+	$(FUZZ_CC) $(CPPFLAGS) $(WARN) $(FUZZ_CFLAGS) $(PKG_CFLAGS) $< $(FUZZ_SRC) \
+	    $(shell pkg-config --libs libcjson 2>/dev/null) -lm -o $@
+
+fuzz-build: $(FUZZ_TARGETS:%=$(FUZZ_BUILD)/fuzz_%)
+
+fuzz: fuzz-build
+	@set -e; $(foreach t,$(FUZZ_TARGETS),\
+	    rm -rf $(FUZZ_BUILD)/seeds/$(t); \
+	    mkdir -p $(FUZZ_BUILD)/seeds/$(t) $(FUZZ_BUILD)/corpus/$(t) $(FUZZ_BUILD)/artifacts/$(t); \
+	    for f in $(FUZZ_SEEDS_$(t)); do \
+	        cp "$$f" "$(FUZZ_BUILD)/seeds/$(t)/$$(echo "$$f" | sed "s|^\.\./||" | tr / _)"; done;)
+	@fail=0; for t in $(FUZZ_TARGETS); do \
+	    echo "== fuzz_$$t for $(FUZZ_SECONDS) s (log: $(FUZZ_BUILD)/fuzz_$$t.log)"; \
+	    if $(FUZZ_BUILD)/fuzz_$$t $(FUZZ_OPTS) -max_total_time=$(FUZZ_SECONDS) \
+	        -dict=tests/fuzz/$$t.dict -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t/ \
+	        $(FUZZ_BUILD)/corpus/$$t $(FUZZ_BUILD)/seeds/$$t tests/fuzz/corpus/$$t \
+	        tests/fuzz/regressions/$$t >$(FUZZ_BUILD)/fuzz_$$t.log 2>&1; then \
+	        grep -h -e '^stat::number_of_executed_units' -e '^stat::new_units_added' \
+	            -e '^stat::peak_rss_mb' $(FUZZ_BUILD)/fuzz_$$t.log | sed "s/^/  fuzz_$$t /"; \
+	    else \
+	        fail=1; tail -n 60 $(FUZZ_BUILD)/fuzz_$$t.log; \
+	        echo "fuzz_$$t FAILED: the input is in $(FUZZ_BUILD)/artifacts/$$t/"; \
+	    fi; \
+	done; \
+	if [ $$fail -ne 0 ]; then echo "make fuzz: FAILED"; exit 1; fi; echo "make fuzz: no failures"
+
+asan:
+	$(ASAN_ENV) $(MAKE) BUILD=$(ASAN_BUILD) CC=$(ASAN_CC) OPT='$(ASAN_FLAGS)' \
+	    LDFLAGS='-fsanitize=address,undefined' test

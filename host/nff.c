@@ -50,6 +50,7 @@ typedef struct {
     long ent_n;      /* vertex count for p / pp, 0 otherwise */
     long ent_line;   /* line of the entity keyword */
     long vertex;     /* 1-based vertex (or cone end) of the current line, 0 on the keyword line */
+    char shown[176]; /* a token made printable for a message (see tok_shown) */
 } nff_reader;
 
 #if defined(__GNUC__)
@@ -75,6 +76,12 @@ static int fail(nff_reader *r, long line, const char *fmt, ...)
 static int oom(nff_reader *r)
 {
     return fail(r, r->line, "out of memory");
+}
+
+/* Token t for a message: at most 40 bytes, control characters and non-UTF-8 escaped. */
+static const char *tok_shown(nff_reader *r, const char *t)
+{
+    return scene_printable(t, 40, r->shown, sizeof r->shown);
 }
 
 static int is_blank(char c)
@@ -152,11 +159,11 @@ static int number(nff_reader *r, int i, double *out)
     char ctx[96];
     if (end == t || *end != '\0') {
         context(r, ctx, sizeof ctx);
-        return fail(r, r->line, "expected a number %s, found '%.40s'", ctx, t);
+        return fail(r, r->line, "expected a number %s, found '%s'", ctx, tok_shown(r, t));
     }
     if (!isfinite(x) || fabs(x) > NFF_MAX_ABS) {
         context(r, ctx, sizeof ctx);
-        return fail(r, r->line, "number '%.40s' %s is %s", t, ctx,
+        return fail(r, r->line, "number '%s' %s is %s", tok_shown(r, t), ctx,
                     isfinite(x) ? "out of range (magnitude above 1e30)" : "not finite");
     }
     *out = x;
@@ -187,8 +194,8 @@ static int integer(nff_reader *r, int i, double lo, double hi, const char *what,
     if (number(r, i, &x) != 0)
         return -1;
     if (x != floor(x) || x < lo || x > hi)
-        return fail(r, r->line, "%s must be an integer in %.0f..%.0f, found '%.40s'", what, lo, hi,
-                    r->tok[i]);
+        return fail(r, r->line, "%s must be an integer in %.0f..%.0f, found '%s'", what, lo, hi,
+                    tok_shown(r, r->tok[i]));
     *out = (long)x;
     return 0;
 }
@@ -238,14 +245,15 @@ static int parse_view(nff_reader *r)
     long seen[6] = {0, 0, 0, 0, 0, 0};
     double val[6][3];
     long v_line = r->line, w = 0, h = 0;
+    char note[64];
     int k, eof = 0;
     scene_camera *c = &r->s->camera;
     vec3f from, at, up;
 
     if (r->ntok != 1)
         return fail(r, r->line,
-                    "expected nothing after 'v' (its values follow on six lines), found '%.40s'",
-                    r->tok[1]);
+                    "expected nothing after 'v' (its values follow on six lines), found '%s'",
+                    tok_shown(r, r->tok[1]));
     for (;;) {
         if (!next_content(r)) {
             eof = 1;
@@ -279,12 +287,16 @@ static int parse_view(nff_reader *r)
         return fail(
             r, r->line,
             "the 'v' block (line %ld) has no '%s' line (it needs from, at, up, angle, hither "
-            "and resolution), found '%.40s'",
-            v_line, keys[k], r->tok[0]);
+            "and resolution), found '%s'",
+            v_line, keys[k], tok_shown(r, r->tok[0]));
     }
-    if (!(val[3][0] > 0.0 && val[3][0] < 180.0))
-        return fail(r, seen[3], "'angle' must lie strictly between 0 and 180 degrees, found %g",
-                    val[3][0]);
+    /* as stored: a float */
+    if (!((float)val[3][0] > 0.0f && (float)val[3][0] < 180.0f))
+        return fail(r, seen[3],
+                    "'angle' must lie strictly between 0 and 180 degrees, found %.10g%s", val[3][0],
+                    scene_single_note(val[3][0], note, sizeof note));
+    if ((long long)w * h > SCENE_MAX_PIXELS)
+        return fail(r, seen[5], "'resolution' %ldx%ld has more than 2^28 pixels", w, h);
     from = v3(val[0]);
     at = v3(val[1]);
     up = v3(val[2]);
@@ -298,7 +310,65 @@ static int parse_view(nff_reader *r)
     c->d = 1.0f;
     r->s->width = (int)w;
     r->s->height = (int)h;
+    {
+        char msg[256];
+        if (scene_check_view(r->s, msg, sizeof msg) != 0)
+            return fail(r, seen[3], "the 'v' block (line %ld) gives no usable view: %s", v_line,
+                        msg);
+    }
     return 0;
+}
+
+/* The area of a polygon read vertex by vertex: Newell's normal (as scene_newell sums it)
+ * and the bounding box. */
+typedef struct {
+    double n[3], lo[3], hi[3];
+    vec3f first, prev;
+    long count;
+} area_sum;
+
+static void area_edge(area_sum *a, vec3f p, vec3f q)
+{
+    a->n[0] += ((double)p.y - q.y) * ((double)p.z + q.z);
+    a->n[1] += ((double)p.z - q.z) * ((double)p.x + q.x);
+    a->n[2] += ((double)p.x - q.x) * ((double)p.y + q.y);
+}
+
+static void area_add(area_sum *a, vec3f q)
+{
+    double c[3];
+    int k;
+    c[0] = q.x;
+    c[1] = q.y;
+    c[2] = q.z;
+    if (a->count == 0) {
+        memset(a, 0, sizeof *a);
+        a->first = q;
+        for (k = 0; k < 3; k++)
+            a->lo[k] = a->hi[k] = c[k];
+    } else {
+        area_edge(a, a->prev, q);
+    }
+    for (k = 0; k < 3; k++) {
+        if (c[k] < a->lo[k])
+            a->lo[k] = c[k];
+        if (c[k] > a->hi[k])
+            a->hi[k] = c[k];
+    }
+    a->prev = q;
+    a->count++;
+}
+
+/* 1 when the polygon has no area (relative to its size; as the JSON reader decides). */
+static int area_is_zero(area_sum *a)
+{
+    double len, size2 = 0;
+    int k;
+    area_edge(a, a->prev, a->first);
+    len = sqrt(a->n[0] * a->n[0] + a->n[1] * a->n[1] + a->n[2] * a->n[2]);
+    for (k = 0; k < 3; k++)
+        size2 += (a->hi[k] - a->lo[k]) * (a->hi[k] - a->lo[k]);
+    return !(len > 1e-12 * size2) || !isfinite(len);
 }
 
 /* p n / pp n and their vertex lines. */
@@ -312,6 +382,7 @@ static int parse_polygon(nff_reader *r, int patch)
     scene_triangle tri;
     scene_array *verts = &r->s->poly_verts;
     size_t first = verts->count;
+    area_sum area;
 
     if (r->ntok != 2)
         return fail(r, r->line, "expected the vertex count after '%s' (%s n), found %d values", kw,
@@ -320,7 +391,8 @@ static int parse_polygon(nff_reader *r, int patch)
     if (number(r, 1, &d[0]) != 0)
         return -1;
     if (d[0] < 3)
-        return fail(r, r->line, "'%s' needs at least 3 vertices, found %s", kw, r->tok[1]);
+        return fail(r, r->line, "'%s' needs at least 3 vertices, found %s", kw,
+                    tok_shown(r, r->tok[1]));
     if (integer(r, 1, 3, NFF_MAX_VERTS, patch ? "the 'pp' vertex count" : "the 'p' vertex count",
                 &n) != 0)
         return -1;
@@ -330,6 +402,7 @@ static int parse_polygon(nff_reader *r, int patch)
     memset(&tri, 0, sizeof tri);
     tri.material = mat;
     tri.has_normals = patch;
+    area.count = 0;
     for (i = 0; i < n; i++) {
         vec3f q, qn = vec3f_make(0, 0, 0);
         if (!next_content(r))
@@ -341,6 +414,7 @@ static int parse_polygon(nff_reader *r, int patch)
         if (numbers(r, 0, patch ? 6 : 3, d, patch ? "x y z nx ny nz" : "x y z") != 0)
             return -1;
         q = v3(d);
+        area_add(&area, q);
         if (patch && vec3f_normalize(v3(d + 3), &qn) != 0)
             return fail(r, r->line, "zero normal for vertex %ld of 'pp %ld' (line %ld)", i + 1, n,
                         r->ent_line);
@@ -366,6 +440,11 @@ static int parse_polygon(nff_reader *r, int patch)
                 return -1;
         }
     }
+    if (area_is_zero(&area))
+        return fail(r, r->ent_line,
+                    "'%s %ld' has zero area: its vertices are collinear or coincide (the polygon "
+                    "ends at line %ld)",
+                    kw, n, r->line);
     if (!patch && n > 3) {
         scene_polygon poly;
         poly.first = (int)first;
@@ -455,6 +534,12 @@ static int parse_entity(nff_reader *r, long *v_line)
         long i;
         if (numbers(r, 1, 8, d, "r g b Kd Ks Shine T ior") != 0)
             return -1;
+        for (i = 0; i < 3; i++)
+            if (fabs(d[3] * d[i]) > NFF_MAX_ABS)
+                return fail(r, r->line,
+                            "the diffuse colour Kd * (r g b) = %g is out of range (magnitude above "
+                            "1e30)",
+                            d[3] * d[i]);
         m.kd = vec3f_make((float)(d[3] * d[0]), (float)(d[3] * d[1]), (float)(d[3] * d[2]));
         m.ka = m.kd;
         m.ks = m.km = vec3f_make((float)d[4], (float)d[4], (float)d[4]);
@@ -472,8 +557,9 @@ static int parse_entity(nff_reader *r, long *v_line)
         int mat;
         if (numbers(r, 1, 4, d, "cx cy cz r") != 0)
             return -1;
-        if (d[3] == 0.0)
-            return fail(r, r->line, "sphere radius must not be zero");
+        if ((float)d[3] == 0.0f) /* as stored: a float */
+            return fail(r, r->line, "sphere radius must not be zero, found %.10g%s", d[3],
+                        scene_single_note(d[3], r->shown, sizeof r->shown));
         if ((mat = current_material(r)) < 0)
             return -1;
         sp.center = v3(d);
@@ -491,8 +577,8 @@ static int parse_entity(nff_reader *r, long *v_line)
         int view_key = strcmp(kw, "from") == 0 || strcmp(kw, "at") == 0 || strcmp(kw, "up") == 0 ||
                        strcmp(kw, "angle") == 0 || strcmp(kw, "hither") == 0 ||
                        strcmp(kw, "resolution") == 0;
-        return fail(r, r->line, "unknown entity '%.40s' (expected one of v b l f s p pp c #)%s", kw,
-                    view_key ? "; it belongs inside a 'v' block" : "");
+        return fail(r, r->line, "unknown entity '%s' (expected one of v b l f s p pp c #)%s",
+                    tok_shown(r, kw), view_key ? "; it belongs inside a 'v' block" : "");
     }
 }
 
@@ -522,6 +608,8 @@ static int parse_buffer(char *buf, size_t len, const char *name, scene *s, char 
             return fail(&r, line, "unexpected NUL byte (not a text file?)");
         }
     }
+    if (len >= 3 && memcmp(buf, "\xEF\xBB\xBF", 3) == 0)
+        r.cur += 3; /* a UTF-8 byte order mark */
     while (next_content(&r))
         if (parse_entity(&r, &v_line) != 0)
             return -1;

@@ -257,25 +257,21 @@ int scene_check(const scene *s, char *err, size_t errlen)
     return 0;
 }
 
-int scene_finish(scene *s, int width, int height, int max_depth, char *err, size_t errlen)
+/* The view part of scene_finish, on a scene whose size and depth are final: derives the
+ * window from an NFF angle or a field of view, then checks the view. Messages have no
+ * name prefix. */
+static int finish_view(scene *s, char *err, size_t errlen)
 {
     scene_camera *c = &s->camera;
-    const char *name = s->name ? s->name : "scene";
-    if (width > 0)
-        s->width = width;
-    if (height > 0)
-        s->height = height;
-    if (max_depth > 0)
-        s->max_depth = max_depth;
-    if (s->width <= 0 || s->height <= 0 || s->width > 65536 || s->height > 65536 ||
-        (long long)s->width * s->height > (1LL << 28)) {
+    if (s->width <= 0 || s->height <= 0 || s->width > SCENE_MAX_SIDE ||
+        s->height > SCENE_MAX_SIDE || (long long)s->width * s->height > SCENE_MAX_PIXELS) {
         snprintf(err, errlen,
-                 "%s: image size %dx%d out of range (1..65536 per side, at most 2^28 pixels)", name,
-                 s->width, s->height);
+                 "image size %dx%d out of range (1..65536 per side, at most 2^28 pixels)", s->width,
+                 s->height);
         return -1;
     }
     if (s->max_depth < 1 || s->max_depth > 64) {
-        snprintf(err, errlen, "%s: maximum depth %d out of range (1..64)", name, s->max_depth);
+        snprintf(err, errlen, "maximum depth %d out of range (1..64)", s->max_depth);
         return -1;
     }
     if (c->nff_angle_deg > 0.0f) {
@@ -295,32 +291,71 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
         c->r = (float)(t * s->width / s->height);
         c->l = -c->r;
     }
-    if (scene_check(s, err, errlen) != 0)
+    if (!finite3(c->eye) || !finite3(c->u) || !finite3(c->v) || !finite3(c->w) ||
+        !finite3(c->dir) || !isfinite(c->l) || !isfinite(c->r) || !isfinite(c->b) ||
+        !isfinite(c->t) || !isfinite(c->d)) {
+        snprintf(err, errlen, "camera has non-finite values%s",
+                 c->nff_angle_deg > 0.0f || c->fov_deg > 0.0f
+                     ? " (the window derived from the angle or field of view overflows)"
+                     : "");
         return -1;
+    }
     if (!(c->r > c->l) || !(c->t > c->b)) {
-        snprintf(err, errlen, "%s: camera window must have l < r and b < t", name);
+        snprintf(err, errlen, "camera window must have l < r and b < t%s",
+                 c->nff_angle_deg > 0.0f || c->fov_deg > 0.0f
+                     ? " (the angle or field of view is too small for the image size)"
+                     : "");
         return -1;
     }
     if (c->projection == SCENE_PERSPECTIVE && !(c->d > 0.0f)) {
-        snprintf(err, errlen, "%s: perspective camera needs a positive image-plane distance", name);
+        snprintf(err, errlen, "perspective camera needs a positive image-plane distance");
         return -1;
     }
     if (fabsf(vec3f_length(c->u) - 1) > 1e-4f || fabsf(vec3f_length(c->v) - 1) > 1e-4f ||
         fabsf(vec3f_length(c->w) - 1) > 1e-4f || fabsf(vec3f_dot(c->u, c->v)) > 1e-4f ||
         fabsf(vec3f_dot(c->u, c->w)) > 1e-4f || fabsf(vec3f_dot(c->v, c->w)) > 1e-4f) {
-        snprintf(err, errlen, "%s: camera basis u, v, w is not orthonormal", name);
+        snprintf(err, errlen, "camera basis u, v, w is not orthonormal");
         return -1;
     }
     if (c->projection == SCENE_OBLIQUE) {
         if (vec3f_normalize(c->dir, &c->dir) != 0 || vec3f_dot(c->dir, c->w) >= 0.0f) {
-            snprintf(
-                err, errlen,
-                "%s: oblique camera direction must be non-zero and point into the view (-w side)",
-                name);
+            snprintf(err, errlen,
+                     "oblique camera direction must be non-zero and point into the view (-w side)");
             return -1;
         }
     }
     return 0;
+}
+
+int scene_check_view(const scene *s, char *err, size_t errlen)
+{
+    scene tmp;
+    scene_init(&tmp);
+    tmp.camera = s->camera;
+    tmp.width = s->width;
+    tmp.height = s->height;
+    tmp.max_depth = s->max_depth;
+    return finish_view(&tmp, err, errlen);
+}
+
+int scene_finish(scene *s, int width, int height, int max_depth, char *err, size_t errlen)
+{
+    const char *name = s->name ? s->name : "scene";
+    char msg[256];
+    if (width > 0)
+        s->width = width;
+    if (height > 0)
+        s->height = height;
+    if (max_depth > 0)
+        s->max_depth = max_depth;
+    if (s->camera.projection != SCENE_PERSPECTIVE && s->camera.projection != SCENE_ORTHOGRAPHIC &&
+        s->camera.projection != SCENE_OBLIQUE)
+        return scene_check(s, err, errlen); /* names the bad projection */
+    if (finish_view(s, msg, sizeof msg) != 0) {
+        snprintf(err, errlen, "%s: %s", name, msg);
+        return -1;
+    }
+    return scene_check(s, err, errlen);
 }
 
 /* Reads a whole file into a NUL-terminated buffer. */
@@ -333,6 +368,12 @@ int scene_read_file(const char *path, char **out, size_t *outlen, char *err, siz
     if (stat(path, &st) == 0) {
         if (S_ISDIR(st.st_mode)) {
             snprintf(err, errlen, "%s: cannot read: %s", path, strerror(EISDIR));
+            return -1;
+        }
+        if (S_ISREG(st.st_mode) && st.st_size > (off_t)SCENE_MAX_FILE_BYTES) {
+            snprintf(err, errlen,
+                     "%s: file too large (%lld bytes; a scene file may have at most %ld)", path,
+                     (long long)st.st_size, (long)SCENE_MAX_FILE_BYTES);
             return -1;
         }
         if (S_ISREG(st.st_mode) && st.st_size > 0)
@@ -372,12 +413,104 @@ int scene_read_file(const char *path, char **out, size_t *outlen, char *err, siz
             }
             break;
         }
+        if (len > (size_t)SCENE_MAX_FILE_BYTES) {
+            free(buf);
+            fclose(f);
+            snprintf(err, errlen, "%s: file too large (a scene file may have at most %ld bytes)",
+                     path, (long)SCENE_MAX_FILE_BYTES);
+            return -1;
+        }
+        if (memchr(buf + len - n, '\0', n))
+            break; /* binary: the reader reports the NUL byte and its line */
     }
     fclose(f);
     buf[len] = '\0';
     *out = buf;
     *outlen = len;
     return 0;
+}
+
+/* The length of the UTF-8 sequence at u (at most avail bytes), or 0 when it is not one or
+ * encodes a C1 control character. */
+static size_t utf8_sequence(const unsigned char *u, size_t avail)
+{
+    unsigned char lo = 0x80, hi = 0xBF;
+    size_t n, k;
+    if (u[0] >= 0xC2 && u[0] <= 0xDF)
+        n = 2;
+    else if (u[0] >= 0xE0 && u[0] <= 0xEF)
+        n = 3;
+    else if (u[0] >= 0xF0 && u[0] <= 0xF4)
+        n = 4;
+    else
+        return 0;
+    if (u[0] == 0xC2)
+        lo = 0xA0; /* U+0080..U+009F: C1 controls */
+    else if (u[0] == 0xE0)
+        lo = 0xA0; /* overlong */
+    else if (u[0] == 0xED)
+        hi = 0x9F; /* surrogates */
+    else if (u[0] == 0xF0)
+        lo = 0x90; /* overlong */
+    else if (u[0] == 0xF4)
+        hi = 0x8F; /* above U+10FFFF */
+    if (n > avail)
+        return 0;
+    for (k = 1; k < n; k++) {
+        if (u[k] < lo || u[k] > hi)
+            return 0;
+        lo = 0x80;
+        hi = 0xBF;
+    }
+    return n;
+}
+
+const char *scene_single_note(double x, char *buf, size_t len)
+{
+    float f = (float)x;
+    if (len == 0)
+        return buf;
+    buf[0] = '\0';
+    if ((double)f != x && (f == 0.0f || fabsf(f) == 180.0f))
+        snprintf(buf, len, " (%g in single precision)", (double)f);
+    return buf;
+}
+
+const char *scene_printable(const char *s, size_t max, char *out, size_t outlen)
+{
+    size_t i = 0, o = 0;
+    if (outlen == 0)
+        return out;
+    while (i < max && s[i] != '\0') {
+        const unsigned char *u = (const unsigned char *)s + i;
+        char esc[8];
+        const char *piece = (const char *)u;
+        size_t take = 1, n;
+        if (u[0] < 0x20 || u[0] == 0x7f) {
+            snprintf(esc, sizeof esc, "\\x%02X", u[0]);
+            piece = esc;
+        } else if (u[0] >= 0x80) {
+            n = utf8_sequence(u, max - i);
+            if (n == 0) {
+                snprintf(esc, sizeof esc, "\\x%02X", u[0]);
+                piece = esc;
+            } else {
+                take = n;
+            }
+        }
+        n = piece == esc ? strlen(esc) : take;
+        if (o + n + 4 > outlen) /* keep room for "..." and the NUL */
+            break;
+        memcpy(out + o, piece, n);
+        o += n;
+        i += take;
+    }
+    if (s[i] != '\0' && o + 4 <= outlen) { /* cut short */
+        memcpy(out + o, "...", 3);
+        o += 3;
+    }
+    out[o < outlen ? o : outlen - 1] = '\0';
+    return out;
 }
 
 int scene_parse_copy(scene_text_parser parse, const char *text, size_t len, const char *name,

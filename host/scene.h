@@ -112,12 +112,27 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
  * scene_finish calls it. Returns 0, or -1 with "name: what is wrong" in err. */
 int scene_check(const scene *s, char *err, size_t errlen);
 
+/* Checks the view alone, as scene_finish would for the scene's own image size and depth:
+ * the size (1..65536 per side, at most SCENE_MAX_PIXELS), the depth, the window derived
+ * from an NFF angle or a field of view, finite camera values, l < r and b < t, a positive
+ * perspective distance, an orthonormal basis, an oblique direction into the view. Changes
+ * nothing. Readers call it so that a bad view fails with a line number. Returns 0, or -1
+ * with the reason (no name prefix) in err. */
+int scene_check_view(const scene *s, char *err, size_t errlen);
+
+/* Limits on what a reader accepts. */
+#define SCENE_MAX_SIDE 65536            /* pixels per image side */
+#define SCENE_MAX_PIXELS (1L << 28)     /* pixels per image */
+#define SCENE_MAX_FILE_BYTES (1L << 30) /* bytes per scene file */
+
 /* Loads a scene, choosing the reader by extension (.nff, .json). Returns 0, or -1 with
  * "file:line: message" in err. */
 int scene_load(const char *path, scene *s, char *err, size_t errlen);
 
-/* Reads a whole file into a malloc'd NUL-terminated buffer (directories and unreadable
- * files are errors naming the path and the reason). Returns 0, or -1 with err. */
+/* Reads a whole file into a malloc'd NUL-terminated buffer (directories, unreadable files
+ * and files over SCENE_MAX_FILE_BYTES are errors naming the path and the reason). Reading
+ * stops after the first chunk holding a NUL byte: that is binary, which the readers reject
+ * with its line, so /dev/zero is not read forever. Returns 0, or -1 with err. */
 int scene_read_file(const char *path, char **out, size_t *outlen, char *err, size_t errlen);
 
 /* A reader's parser: text in buf[0..len), writable, with buf[len] == '\0'. */
@@ -140,6 +155,16 @@ int json_scene_parse(const char *text, size_t len, const char *name, scene *s, c
  * the kernels compute it, is exactly zero (coincident or collinear vertices). Such a
  * triangle has no normal and is left out of rendering. */
 int scene_triangle_degenerate(const scene_triangle *t);
+
+/* Copies text from a file into out for an error message: at most max bytes of the
+ * NUL-terminated string s, with control characters and bytes that are not UTF-8 written as
+ * \xNN, and "..." when cut short. out is always NUL-terminated. Returns out. */
+const char *scene_printable(const char *s, size_t max, char *out, size_t outlen);
+
+/* For a message about a number stored as a float: when rounding to single precision
+ * changes x into 0 or +-180 (bounds the readers check), " (V in single precision)" in buf;
+ * otherwise "". Returns buf. */
+const char *scene_single_note(double x, char *buf, size_t len);
 
 /* Vector helpers shared by readers and the camera set-up. */
 vec3f vec3f_make(float x, float y, float z);

@@ -226,7 +226,63 @@ static const char *type_name(const cJSON *n)
     return "an unknown value";
 }
 
+/* Text from the file, made printable for a message (at most 40 bytes). */
+#define SHOWN_LEN 176
+static const char *shown(const char *text, char *buf)
+{
+    return scene_printable(text ? text : "", 40, buf, SHOWN_LEN);
+}
+
 /* ---- typed values -------------------------------------------------------------------------- */
+
+typedef struct {
+    const cJSON *node;
+    size_t index; /* in document order */
+} key_entry;
+
+static int cmp_key(const void *a, const void *b)
+{
+    const key_entry *x = a, *y = b;
+    int c = strcmp(x->node->string, y->node->string);
+    if (c != 0)
+        return c;
+    return x->index < y->index ? -1 : x->index > y->index;
+}
+
+/* Finds the first member (in document order) whose key an earlier member has, in
+ * O(n log n): *dup is it and *first the earlier one, or both NULL. Returns -1 when out of
+ * memory. */
+static int find_duplicate(const cJSON *node, const cJSON **dup, const cJSON **first)
+{
+    const cJSON *c;
+    key_entry *keys;
+    size_t n = 0, i, best = (size_t)-1;
+    *dup = *first = NULL;
+    for (c = node->child; c; c = c->next)
+        n++;
+    if (n < 2)
+        return 0;
+    keys = malloc(n * sizeof *keys);
+    if (!keys)
+        return -1;
+    for (i = 0, c = node->child; c; c = c->next, i++) {
+        keys[i].node = c;
+        keys[i].index = i;
+    }
+    qsort(keys, n, sizeof *keys, cmp_key);
+    /* in each run of equal keys, sorted by position, the second one is the earliest repeat */
+    for (i = 1; i < n; i++)
+        if (strcmp(keys[i].node->string, keys[i - 1].node->string) == 0 &&
+            (i < 2 || strcmp(keys[i - 1].node->string, keys[i - 2].node->string) != 0) &&
+            (best == (size_t)-1 || keys[i].index < keys[best].index))
+            best = i;
+    if (best != (size_t)-1) {
+        *dup = keys[best].node;
+        *first = keys[best - 1].node;
+    }
+    free(keys);
+    return 0;
+}
 
 /* Checks that node is an object whose keys are all in `allowed` (NULL: any key) and
  * unique. `path` names it in messages. */
@@ -234,6 +290,7 @@ static int check_object(const jreader *r, const cJSON *node, const char *path,
                         const char *const *allowed)
 {
     const cJSON *c, *d;
+    char buf[SHOWN_LEN];
     if (!cJSON_IsObject(node))
         return jfail(r, node, "%s: expected an object, found %s", path, type_name(node));
     for (c = node->child; c; c = c->next) {
@@ -249,14 +306,22 @@ static int check_object(const jreader *r, const cJSON *node, const char *path,
                 for (a = allowed; *a && n < sizeof list; a++)
                     n += (size_t)snprintf(list + n, sizeof list - n, "%s%s",
                                           a == allowed ? "" : ", ", *a);
-                return jfail(r, c, "%s: unknown key \"%.40s\" (expected one of: %s)", path,
-                             c->string, list);
+                return jfail(r, c, "%s: unknown key \"%s\" (expected one of: %s)", path,
+                             shown(c->string, buf), list);
             }
+            /* only allowed keys so far, so this stays short */
+            for (d = node->child; d != c; d = d->next)
+                if (strcmp(d->string, c->string) == 0)
+                    return jfail(r, c, "%s: duplicate key \"%s\" (first at line %ld)", path,
+                                 shown(c->string, buf), locate_line(r, d));
         }
-        for (d = node->child; d != c; d = d->next)
-            if (strcmp(d->string, c->string) == 0)
-                return jfail(r, c, "%s: duplicate key \"%.40s\" (first at line %ld)", path,
-                             c->string, locate_line(r, d));
+    }
+    if (!allowed) { /* any number of keys: sort them */
+        if (find_duplicate(node, &c, &d) != 0)
+            return oom(r, node);
+        if (c)
+            return jfail(r, c, "%s: duplicate key \"%s\" (first at line %ld)", path,
+                         shown(c->string, buf), locate_line(r, d));
     }
     return 0;
 }
@@ -361,6 +426,8 @@ static int read_image(const jreader *r, const cJSON *img)
         return -1;
     if ((m = member(img, "height")) && get_int(r, m, "image.height", 1, 65536, &r->s->height) != 0)
         return -1;
+    if ((long long)r->s->width * r->s->height > SCENE_MAX_PIXELS)
+        return jfail(r, img, "image: %dx%d has more than 2^28 pixels", r->s->width, r->s->height);
     return 0;
 }
 
@@ -372,6 +439,7 @@ static int read_camera(const jreader *r, const cJSON *cam)
     const cJSON *m, *look, *viewn, *up, *win, *fov, *dist, *dirn;
     vec3f eye, upv, view;
     double d = 1.0;
+    char buf[SHOWN_LEN];
 
     if (check_object(r, cam, "camera", keys) != 0)
         return -1;
@@ -387,8 +455,8 @@ static int read_camera(const jreader *r, const cJSON *cam)
         else if (p)
             return jfail(r, m,
                          "camera.projection: expected \"perspective\", \"orthographic\" or "
-                         "\"oblique\", found \"%.40s\"",
-                         p);
+                         "\"oblique\", found \"%s\"",
+                         shown(p, buf));
         else
             return jfail(r, m, "camera.projection: expected a string, found %s", type_name(m));
     }
@@ -435,8 +503,9 @@ static int read_camera(const jreader *r, const cJSON *cam)
     if (dist) {
         if (get_number(r, dist, "camera.distance", &d) != 0)
             return -1;
-        if (!(d > 0))
-            return jfail(r, dist, "camera.distance: must be > 0, found %g", d);
+        if (!((float)d > 0)) /* as stored: a float */
+            return jfail(r, dist, "camera.distance: must be > 0, found %.10g%s", d,
+                         scene_single_note(d, buf, sizeof buf));
     }
     c->d = (float)d;
     if (fov && win)
@@ -445,15 +514,16 @@ static int read_camera(const jreader *r, const cJSON *cam)
         double deg;
         if (get_number(r, fov, "camera.fov", &deg) != 0)
             return -1;
-        if (!(deg > 0 && deg < 180))
+        if (!((float)deg > 0 && (float)deg < 180)) /* as stored: a float */
             return jfail(r, fov,
-                         "camera.fov: must lie strictly between 0 and 180 degrees, found %g", deg);
+                         "camera.fov: must lie strictly between 0 and 180 degrees, found %.10g%s",
+                         deg, scene_single_note(deg, buf, sizeof buf));
         c->fov_deg = (float)deg; /* the window follows from the final image size */
     } else if (win) {
         double w[4];
         if (get_numbers(r, win, "camera.window", 4, "[l, r, b, t]", w) != 0)
             return -1;
-        if (!(w[0] < w[1]) || !(w[2] < w[3]))
+        if (!((float)w[0] < (float)w[1]) || !((float)w[2] < (float)w[3])) /* as floats */
             return jfail(r, win, "camera.window: needs l < r and b < t, found [%g, %g, %g, %g]",
                          w[0], w[1], w[2], w[3]);
         c->l = (float)w[0];
@@ -474,6 +544,9 @@ static int read_camera(const jreader *r, const cJSON *cam)
         if (vec3f_dot(c->dir, c->w) >= 0)
             return jfail(r, dirn, "camera.direction: must point into the view (against w)");
     }
+    /* what is left, e.g. a field of view too small or too wide for the distance and size */
+    if (scene_check_view(r->s, buf, sizeof buf) != 0)
+        return jfail(r, fov ? fov : cam, "camera: gives no usable view: %s", buf);
     return 0;
 }
 
@@ -488,6 +561,7 @@ static int read_materials(jreader *r, const cJSON *mats)
     static const char *const colours[] = {"ka", "kd", "ks", "km", "kt"};
     const cJSON *m;
     size_t n = 0;
+    char buf[SHOWN_LEN];
     if (check_object(r, mats, "materials", NULL) != 0)
         return -1;
     r->nmats = (size_t)cJSON_GetArraySize(mats);
@@ -498,7 +572,7 @@ static int read_materials(jreader *r, const cJSON *mats)
         scene_material mat;
         vec3f *dst[5];
         const cJSON *v;
-        char path[160];
+        char path[SHOWN_LEN + 16], note[64];
         double x;
         long idx;
         int k;
@@ -510,18 +584,19 @@ static int read_materials(jreader *r, const cJSON *mats)
         dst[2] = &mat.ks;
         dst[3] = &mat.km;
         dst[4] = &mat.kt;
-        snprintf(path, sizeof path, "materials.%.60s", m->string);
+        shown(m->string, buf);
+        snprintf(path, sizeof path, "materials.%s", buf);
         if (check_object(r, m, path, keys) != 0)
             return -1;
         for (k = 0; k < 5; k++) {
             if ((v = member(m, colours[k]))) {
-                snprintf(path, sizeof path, "materials.%.60s.%s", m->string, colours[k]);
+                snprintf(path, sizeof path, "materials.%s.%s", buf, colours[k]);
                 if (get_colour(r, v, path, dst[k]) != 0)
                     return -1;
             }
         }
         if ((v = member(m, "p"))) {
-            snprintf(path, sizeof path, "materials.%.60s.p", m->string);
+            snprintf(path, sizeof path, "materials.%s.p", buf);
             if (get_number(r, v, path, &x) != 0)
                 return -1;
             if (!(x >= 0))
@@ -529,11 +604,12 @@ static int read_materials(jreader *r, const cJSON *mats)
             mat.p = (float)x;
         }
         if ((v = member(m, "ior"))) {
-            snprintf(path, sizeof path, "materials.%.60s.ior", m->string);
+            snprintf(path, sizeof path, "materials.%s.ior", buf);
             if (get_number(r, v, path, &x) != 0)
                 return -1;
-            if (!(x > 0))
-                return jfail(r, v, "%s: the index of refraction must be > 0, found %g", path, x);
+            if (!((float)x > 0)) /* as stored: a float */
+                return jfail(r, v, "%s: the index of refraction must be > 0, found %.10g%s", path,
+                             x, scene_single_note(x, note, sizeof note));
             mat.ior = (float)x;
         }
         idx = scene_push(&r->s->materials, &mat, sizeof mat);
@@ -650,6 +726,7 @@ static int find_material(const jreader *r, const cJSON *obj, const char *path)
     const cJSON *m = need(r, obj, path, "material");
     const char *name;
     mat_entry key, *hit;
+    char buf[SHOWN_LEN];
     if (!m)
         return -1;
     if (!(name = cJSON_GetStringValue(m)))
@@ -658,7 +735,8 @@ static int find_material(const jreader *r, const cJSON *obj, const char *path)
     key.index = 0;
     hit = r->nmats ? bsearch(&key, r->mats, r->nmats, sizeof key, cmp_mat) : NULL;
     if (!hit)
-        return jfail(r, m, "%s.material: no material named \"%.40s\" in \"materials\"", path, name);
+        return jfail(r, m, "%s.material: no material named \"%s\" in \"materials\"", path,
+                     shown(name, buf));
     return hit->index;
 }
 
@@ -671,6 +749,7 @@ static int read_object(const jreader *r, const cJSON *o, int i)
     const cJSON *t, *m;
     const char *type;
     int mat;
+    char buf[SHOWN_LEN];
     snprintf(path, sizeof path, "objects[%d]", i);
     if (check_object(r, o, path, NULL) != 0)
         return -1;
@@ -682,9 +761,9 @@ static int read_object(const jreader *r, const cJSON *o, int i)
         if (!type)
             return jfail(r, t, "%s.type: expected a string, found %s", path, type_name(t));
         return jfail(r, t,
-                     "%s.type: unknown object type \"%.40s\" (expected \"sphere\", \"triangle\" or "
+                     "%s.type: unknown object type \"%s\" (expected \"sphere\", \"triangle\" or "
                      "\"polygon\")",
-                     path, type);
+                     path, shown(type, buf));
     }
     if (check_object(r, o, path,
                      type[0] == 's'   ? sphere_keys
@@ -701,8 +780,9 @@ static int read_object(const jreader *r, const cJSON *o, int i)
         snprintf(sub, sizeof sub, "%s.radius", path);
         if (!(m = need(r, o, path, "radius")) || get_number(r, m, sub, &rad) != 0)
             return -1;
-        if (!(rad > 0))
-            return jfail(r, m, "%s: the radius must be > 0, found %g", sub, rad);
+        if (!((float)rad > 0)) /* as stored: a float */
+            return jfail(r, m, "%s: the radius must be > 0, found %.10g%s", sub, rad,
+                         scene_single_note(rad, buf, sizeof buf));
         if ((mat = find_material(r, o, path)) < 0)
             return -1;
         sp.radius = (float)rad;
@@ -861,7 +941,7 @@ static int parse_buffer(char *buf, size_t len, const char *name, scene *s, char 
     root = cJSON_ParseWithLengthOpts(buf, len + 1, &end, 1);
     if (!root) {
         const char *at = end ? end : cJSON_GetErrorPtr();
-        char near[32];
+        char near[32], shownbuf[SHOWN_LEN];
         size_t k = 0;
         if (!at || at < buf || at > buf + len)
             at = buf + len;
@@ -873,7 +953,8 @@ static int parse_buffer(char *buf, size_t len, const char *name, scene *s, char 
         if (k == 0)
             return fail_line(&r, count_lines(buf, at),
                              "JSON syntax error at the end of the line or file (unclosed value?)");
-        return fail_line(&r, count_lines(buf, at), "JSON syntax error near '%s'", near);
+        return fail_line(&r, count_lines(buf, at), "JSON syntax error near '%s'",
+                         shown(near, shownbuf));
     }
     r.root = root;
     rc = read_scene(&r, root);

@@ -182,6 +182,29 @@ check_true "EXR renderTime attribute" grep -aq renderTime "$T/h.exr"
 check_grep "exposure on EXR warns" "warning: --exposure and --tonemap apply to PNG output only" "$T/err"
 "$BIN" -W 16 -H 12 --half -o "$T/w.png" scenes/default.json >"$T/out" 2>"$T/err"
 check_grep "half on PNG warns" "warning: --half applies to EXR output only" "$T/err"
+# bad input of every kind: exit 1, the file (and line) named, no image written
+mkdir "$T/dir.nff"
+"$BIN" -o "$T/dir.png" "$T/dir.nff" >"$T/out" 2>"$T/err"; check "directory as scene" 1 $?
+check_grep "directory named" "dir.nff: cannot read: Is a directory" "$T/err"
+printf '\211PNG\r\n\032\n\000\000\000\rIHDR' >"$T/png.nff"
+"$BIN" -o "$T/png.png" "$T/png.nff" >"$T/out" 2>"$T/err"; check "binary garbage" 1 $?
+check_grep "binary garbage: file:line" "png.nff:3: unexpected NUL byte" "$T/err"
+printf 'v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 65536 65536\n' >"$T/huge.nff"
+"$BIN" -o "$T/huge.png" "$T/huge.nff" >"$T/out" 2>"$T/err"; check "huge resolution in a file" 1 $?
+check_grep "huge resolution: file:line" "huge.nff:7: 'resolution' 65536x65536 has more than 2^28 pixels" "$T/err"
+"$BIN" -o "$T/big.png" -W 65536 -H 4097 scenes/default.json >"$T/out" 2>"$T/err"
+check "image size over 2^28 pixels" 1 $?
+check_grep "image size message" "image size 65536x4097 out of range" "$T/err"
+: >"$T/empty.json"
+"$BIN" -o "$T/empty.png" "$T/empty.json" >"$T/out" 2>"$T/err"; check "empty file" 1 $?
+check_grep "empty file: file:line" "empty.json:1: empty file" "$T/err"
+printf 'v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 8 8\n\033[2J\n' >"$T/esc.nff"
+"$BIN" -o "$T/esc.png" "$T/esc.nff" >"$T/out" 2>"$T/err"; check "control characters" 1 $?
+check_grep "control characters escaped" "esc.nff:8: unknown entity '.x1B\[2J'" "$T/err"
+check_true "no control characters printed" sh -c "! grep -q \"$(printf '\033')\" '$T/err'"
+"$BIN" -o "$T/zero.png" /dev/zero >"$T/out" 2>"$T/err"; check "device without extension" 1 $?
+check_true "no image after any bad input" \
+    test -z "$(ls "$T" | grep -e '^dir.png' -e '^png.png' -e '^huge.png' -e '^big.png' -e '^empty.png' -e '^esc.png' -e '^zero.png')"
 
 echo "cli.sh: $pass passed, $fails failed"
 [ "$fails" -eq 0 ]

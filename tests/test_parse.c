@@ -9,8 +9,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #define EPS 1e-5f
 
@@ -940,21 +942,453 @@ static void test_json_lines(void **state)
              "x.json:10: ", "no material named", NULL, NULL);
 }
 
+/* ======================================================================================== */
+/* Robustness: every class of bad input, in every field                                     */
+
+/* text with [pos, pos + len) replaced by repl; malloc'd */
+static char *replaced(const char *text, size_t pos, size_t len, const char *repl)
+{
+    size_t n = strlen(text), m = strlen(repl);
+    char *out = malloc(n - len + m + 1);
+    assert_non_null(out);
+    memcpy(out, text, pos);
+    memcpy(out + pos, repl, m);
+    memcpy(out + pos + m, text + pos + len, n - pos - len + 1);
+    return out;
+}
+
+static long line_at(const char *text, size_t pos)
+{
+    long line = 1;
+    size_t i;
+    for (i = 0; i < pos; i++)
+        line += text[i] == '\n';
+    return line;
+}
+
+/* NaN, infinities and out-of-range magnitudes in every numeric field of the NFF scene that
+ * holds every entity: each must fail at its own line. */
+static void test_nff_bad_nonfinite(void **state)
+{
+    static const char *const bad[] = {"nan", "-nan", "inf", "-inf", "infinity", "1e999", "1e31"};
+    const char *t = nff_all;
+    size_t pos = 0, fields = 0;
+    (void)state;
+    while (t[pos]) {
+        size_t end = pos, k;
+        char tok[64], *stop;
+        if (t[pos] == '#') { /* a comment: to the end of the line */
+            while (t[pos] && t[pos] != '\n')
+                pos++;
+            continue;
+        }
+        if (strchr(" \t\r\n", t[pos])) {
+            pos++;
+            continue;
+        }
+        while (t[end] && !strchr(" \t\r\n#", t[end]))
+            end++;
+        assert_true(end - pos < sizeof tok);
+        memcpy(tok, t + pos, end - pos);
+        tok[end - pos] = '\0';
+        strtod(tok, &stop);
+        if (*stop == '\0') { /* a number */
+            fields++;
+            for (k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+                char *text = replaced(t, pos, end - pos, bad[k]), prefix[32];
+                snprintf(prefix, sizeof prefix, "x.nff:%ld: ", line_at(t, pos));
+                nff_bad(text, prefix, bad[k], k == 6 ? "out of range" : "not finite", NULL);
+                free(text);
+            }
+        }
+        pos = end;
+    }
+    print_message("NFF: %zu numeric fields, each NaN, infinite and out of range\n", fields);
+    assert_true(fields > 60);
+}
+
+/* The same in JSON, which has no NaN or infinity literals (syntax errors, at their line) but
+ * overflows 1e999 to infinity. */
+static void test_json_bad_nonfinite(void **state)
+{
+    static const char *const bad[] = {"1e999", "-1e999", "1e31", "NaN", "Infinity", "-inf"};
+    const char *t = json_all;
+    size_t pos = 0, fields = 0;
+    (void)state;
+    while (t[pos]) {
+        size_t end = pos + 1, k;
+        if (t[pos] == '"') { /* a string */
+            while (t[end] && t[end] != '"')
+                end += t[end] == '\\' ? 2 : 1;
+            pos = end + 1;
+            continue;
+        }
+        if (!strchr("-0123456789", t[pos])) {
+            pos++;
+            continue;
+        }
+        while (t[end] && strchr("0123456789.eE+-", t[end]))
+            end++;
+        fields++;
+        for (k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+            char *text = replaced(t, pos, end - pos, bad[k]), prefix[32];
+            snprintf(prefix, sizeof prefix, "x.json:%ld: ", line_at(t, pos));
+            json_bad(text, prefix,
+                     k < 2   ? "not finite"
+                     : k < 3 ? "out of range"
+                             : "syntax error",
+                     NULL, NULL);
+            free(text);
+        }
+        pos = end;
+    }
+    print_message("JSON: %zu numeric fields, each NaN, infinite and out of range\n", fields);
+    assert_true(fields > 70);
+}
+
+/* Numbers that are finite and non-zero as read, but zero or equal once stored as floats. */
+static void test_tiny_numbers(void **state)
+{
+    (void)state;
+    nff_bad(VIEW "s 0 0 0 1e-300\n", "x.nff:8: ", "radius must not be zero", NULL, NULL);
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 1e-300\nhither 1\nresolution 3 3\n",
+            "x.nff:5: ", "'angle'", NULL, NULL);
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 179.999999999\nhither 1\nresolution 3 3\n",
+            "x.nff:5: ", "'angle'", NULL, NULL);
+    /* an angle that is fine for a few pixels, but not for 65536 rows */
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 1e-40\nhither 1\nresolution 1 65536\n",
+            "x.nff:5: ", "no usable view", "too small", NULL);
+    nff_bad(VIEW "f 1e30 1 1 1e30 0 1 0 1\n", "x.nff:8: ", "Kd * (r g b)", "out of range", NULL);
+    json_bad(
+        "{\n" JCAM ",\n\"materials\": {\"m\": {}}, \"objects\": [\n"
+        "{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1e-300, \"material\": \"m\"}]}",
+        "x.json:4: ", "objects[0].radius", "> 0", NULL);
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0],\n"
+             "\"fov\": 60, \"distance\": 1e-300}}",
+             "x.json:3: ", "camera.distance", "> 0", NULL);
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0],\n"
+             "\"fov\": 1e-300}}",
+             "x.json:3: ", "camera.fov", NULL, NULL);
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0],\n"
+             "\"window\": [0, 1e-300, -1, 1]}}",
+             "x.json:3: ", "camera.window", "l < r", NULL);
+    json_bad("{\n" JCAM ",\n\"materials\": {\"a\": {\n\"ior\": 1e-300}}}",
+             "x.json:4: ", "materials.a.ior", "> 0", NULL);
+    /* a field of view and a distance whose window overflows a float at this size */
+    json_bad("{\"image\": {\"width\": 65536, \"height\": 1},\n\"camera\": {\"eye\": [0, 0, 0],\n"
+             "\"view\": [0, 0, -1], \"up\": [0, 1, 0],\n\"fov\": 179.99999, \"distance\": 1e30}}",
+             "x.json:4: ", "camera: gives no usable view", "overflows", NULL);
+    json_bad("{\"image\": {\"width\": 1, \"height\": 65536},\n\"camera\": {\"eye\": [0, 0, 0],\n"
+             "\"view\": [0, 0, -1], \"up\": [0, 1, 0],\n\"fov\": 1e-40, \"distance\": 1e-30}}",
+             "x.json:4: ", "camera: gives no usable view", "too small", NULL);
+}
+
+/* Image sizes: per side, in all, in files and in scene_finish (whose caller may override
+ * the size), so that width * height * bytes per pixel cannot overflow. */
+static void test_bad_image_size(void **state)
+{
+    scene s;
+    char err[256];
+    (void)state;
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 65536 65536\n",
+            "x.nff:7: ", "65536x65536", "2^28 pixels", NULL);
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 65537 1\n",
+            "x.nff:7: ", "'resolution' width", "1..65536", NULL);
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 8 4294967304\n",
+            "x.nff:7: ", "'resolution' height", "1..65536", NULL);
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution -8 8\n",
+            "x.nff:7: ", "'resolution' width", NULL, NULL);
+    json_bad("{\n" JCAM ",\n\"image\": {\"width\": 65536,\n \"height\": 65536}}",
+             "x.json:3: ", "image: 65536x65536", "2^28 pixels", NULL);
+    json_bad("{\n" JCAM ",\n\"image\": {\"width\": 4294967296}}", "x.json:3: ", "image.width",
+             "1..65536", NULL);
+    json_bad("{\n" JCAM ",\n\"image\": {\"height\": -1}}", "x.json:3: ", "image.height", "1..65536",
+             NULL);
+    json_bad("{\n" JCAM ",\n\"max_depth\": 2147483648}", "x.json:3: ", "max_depth", "1..64", NULL);
+
+    /* scene_finish: 2^28 pixels pass, one row more does not; so does a side over 65536 */
+    parse_ok(json_scene_parse, "{" JCAM "}", "size.json", &s);
+    assert_int_equal(scene_finish(&s, 65536, 4096, 0, err, sizeof err), 0);
+    assert_int_equal(scene_finish(&s, 65536, 4097, 0, err, sizeof err), -1);
+    assert_non_null(strstr(err, "size: image size 65536x4097 out of range"));
+    assert_int_equal(scene_finish(&s, 65537, 1, 0, err, sizeof err), -1);
+    assert_non_null(strstr(err, "65537x"));
+    assert_int_equal(scene_finish(&s, 2147483647, 2147483647, 0, err, sizeof err), -1);
+    assert_non_null(strstr(err, "out of range"));
+    assert_int_equal(scene_finish(&s, 8, 6, 65, err, sizeof err), -1);
+    assert_non_null(strstr(err, "maximum depth 65"));
+    scene_free(&s);
+}
+
+/* Vertex counts far beyond the file: an error, found before anything is allocated for them,
+ * or (within the limit) when the file ends. */
+static void test_nff_bad_absurd_counts(void **state)
+{
+    struct rusage before, after;
+    double t0;
+    (void)state;
+    nff_bad(VIEW "p 2147483648\n0 0 0\n", "x.nff:8: ", "'p' vertex count", "3..10000000",
+            "'2147483648'");
+    nff_bad(VIEW "pp 4294967299\n", "x.nff:8: ", "'pp' vertex count", NULL, NULL);
+    nff_bad(VIEW "p 1e30\n", "x.nff:8: ", "'p' vertex count", NULL, NULL);
+    nff_bad(VIEW "p -2147483648\n", "x.nff:8: ", "at least 3", NULL, NULL);
+    nff_bad(VIEW "p 0x10\n", "x.nff:8: ", NULL, NULL, NULL); /* hexadecimal: 16, then EOF */
+    getrusage(RUSAGE_SELF, &before);
+    t0 = now();
+    nff_bad(VIEW "p 10000000\n0 0 0\n1 0 0\n", "x.nff:10: ", "file ended inside 'p 10000000'",
+            "found 2", NULL);
+    nff_bad(VIEW "pp 10000000\n0 0 0 0 0 1\n", "x.nff:9: ", "file ended inside 'pp 10000000'", NULL,
+            NULL);
+    getrusage(RUSAGE_SELF, &after);
+    print_message("two 10^7-vertex headers: %.1f ms, peak memory +%ld KiB\n", (now() - t0) * 1e3,
+                  after.ru_maxrss - before.ru_maxrss);
+    assert_true(after.ru_maxrss - before.ru_maxrss < 32 * 1024);
+    assert_true(now() - t0 < 1.0);
+}
+
+/* Zero-length and parallel camera vectors. */
+static void test_bad_camera_vectors(void **state)
+{
+    (void)state;
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 0 0\nangle 45\nhither 1\nresolution 3 3\n",
+            "x.nff:4: ", "'up' is zero", NULL, NULL);
+    nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 0 -3\nangle 45\nhither 1\nresolution 3 3\n",
+            "x.nff:4: ", "parallel", NULL, NULL);
+    nff_bad("v\nfrom 1 2 3\nat 1 2 3\nup 0 1 0\nangle 45\nhither 1\nresolution 3 3\n",
+            "x.nff:3: ", "'at' equals 'from'", NULL, NULL);
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"view\": [0, 0, 0], \"up\": [0, 1, 0], "
+             "\"fov\": 60}}",
+             "x.json:2: ", "camera.view", "zero", NULL);
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"view\": [0, 0, -1],\n\"up\": [0, 0, 0], "
+             "\"fov\": 60}}",
+             "x.json:3: ", "camera.up", "zero or parallel", NULL);
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"view\": [0, 2, 0],\n\"up\": [0, -1, 0], "
+             "\"fov\": 60}}",
+             "x.json:3: ", "camera.up", "parallel", NULL);
+    json_bad("{\n\"camera\": {\"projection\": \"oblique\", \"eye\": [0, 0, 5],\n"
+             "\"look_at\": [0, 0, 0], \"up\": [0, 1, 0], \"window\": [-1, 1, -1, 1],\n"
+             "\"direction\": [0, 0, 0]}}",
+             "x.json:4: ", "camera.direction", "zero", NULL);
+}
+
+/* Polygons without area are rejected (as in JSON); a polygon with some collinear vertices
+ * but an area is accepted. */
+static void test_nff_bad_degenerate(void **state)
+{
+    scene s;
+    (void)state;
+    nff_bad(VIEW "p 3\n0 0 0\n1 1 1\n2 2 2\n", "x.nff:8: ", "'p 3' has zero area", "collinear",
+            "line 11");
+    nff_bad(VIEW "p 4\n1 1 1\n1 1 1\n1 1 1\n1 1 1\n", "x.nff:8: ", "'p 4' has zero area", NULL,
+            NULL);
+    nff_bad(VIEW "pp 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n3 0 0 0 0 1\n",
+            "x.nff:8: ", "'pp 3' has zero area", NULL, NULL);
+    nff_bad(VIEW "s 0 0 0 1\npp 5\n0 0 0 0 0 1\n1 0 0 0 0 1\n2 0 0 0 0 1\n3 0 0 0 0 1\n"
+                 "4 0 0 0 0 1\n",
+            "x.nff:9: ", "'pp 5' has zero area", NULL, NULL);
+    /* a sliver is not zero: 1e-6 high over 1e3 long */
+    parse_ok(nff_parse, VIEW "p 3\n0 0 0\n1000 0 0\n500 1e-6 0\n", "sliver.nff", &s);
+    assert_int_equal(s.triangles.count, 1);
+    scene_free(&s);
+    /* a vertex in the middle of an edge, and a repeated vertex */
+    parse_ok(nff_parse, VIEW "p 5\n0 0 0\n1 0 0\n2 0 0\n2 2 0\n2 2 0\n", "mid.nff", &s);
+    assert_int_equal(s.polygons.count, 1);
+    scene_free(&s);
+}
+
+/* Bytes that are not a scene: binary with and without NUL bytes, control characters (shown
+ * escaped in the message), a UTF-8 byte order mark (accepted). */
+static void test_binary_garbage(void **state)
+{
+    static const unsigned char png[] = {0x89, 'P', 'N',  'G', '\r', '\n', 0x1a, '\n', 0,
+                                        0,    0,   0x0d, 'I', 'H',  'D',  'R',  0,    0};
+    unsigned char junk[4096];
+    unsigned long x = 12345;
+    char err[512];
+    scene s;
+    int round;
+    size_t i;
+    (void)state;
+    scene_init(&s);
+    assert_int_equal(nff_parse((const char *)png, sizeof png, "x.nff", &s, err, sizeof err), -1);
+    assert_non_null(strstr(err, "x.nff:3: unexpected NUL byte"));
+    scene_free(&s);
+    scene_init(&s);
+    assert_int_equal(json_scene_parse((const char *)png, sizeof png, "x.json", &s, err, sizeof err),
+                     -1);
+    assert_non_null(strstr(err, "x.json:3: unexpected NUL byte"));
+    scene_free(&s);
+    /* pseudo-random bytes without NUL: an error with a line and a printable message */
+    for (round = 0; round < 50; round++) {
+        for (i = 0; i < sizeof junk; i++) {
+            x = x * 1103515245UL + 12345UL;
+            junk[i] = (unsigned char)(1 + (x >> 16) % 255);
+        }
+        scene_init(&s);
+        assert_int_equal(nff_parse((const char *)junk, sizeof junk, "x.nff", &s, err, sizeof err),
+                         -1);
+        scene_free(&s);
+        assert_true(strncmp(err, "x.nff:", 6) == 0 && err[6] >= '1' && err[6] <= '9');
+        for (i = 0; err[i]; i++)
+            if ((unsigned char)err[i] < 0x20 || err[i] == 0x7f)
+                fail_msg("control character in \"%s\"", err);
+        scene_init(&s);
+        assert_int_equal(
+            json_scene_parse((const char *)junk, sizeof junk, "x.json", &s, err, sizeof err), -1);
+        scene_free(&s);
+        assert_true(strncmp(err, "x.json:", 7) == 0 && err[7] >= '1' && err[7] <= '9');
+        for (i = 0; err[i]; i++)
+            if ((unsigned char)err[i] < 0x20 || err[i] == 0x7f)
+                fail_msg("control character in \"%s\"", err);
+    }
+    /* control characters and bytes that are not UTF-8 are escaped; UTF-8 is kept */
+    nff_bad(VIEW "\x1b[2J\xff\xfe\n", "x.nff:8: ", "unknown entity '\\x1B[2J\\xFF\\xFE'", NULL,
+            NULL);
+    nff_bad(VIEW "s 0 0 \xc3\xa9\x07 1\n", "x.nff:8: ", "found '\xc3\xa9\\x07'", NULL, NULL);
+    nff_bad(VIEW "q0123456789012345678901234567890123456789xyz\n",
+            "x.nff:8: ", "'q012345678901234567890123456789012345678...'", NULL, NULL);
+    json_bad("{\n" JCAM ",\n\"\\u001b[2J\": 1}", "x.json:3: ", "unknown key \"\\x1B[2J\"", NULL,
+             NULL);
+    json_bad("{\n" JCAM ",\n\"materials\": {\"\xe2\x98\x83\\u0007\": {\"p\": -1}}}",
+             "x.json:3: ", "materials.\xe2\x98\x83\\x07.p", NULL, NULL);
+    json_bad("{\n\x7f\x02}", "x.json:2: ", "syntax error near '", "\\x02}'", NULL);
+    /* a byte order mark is not an entity */
+    parse_ok(nff_parse, "\xef\xbb\xbf" VIEW, "bom.nff", &s);
+    scene_free(&s);
+    parse_ok(json_scene_parse, "\xef\xbb\xbf{" JCAM "}", "bom.json", &s);
+    scene_free(&s);
+    nff_bad("  \n\t\r\n", "x.nff:", "empty file", NULL, NULL);
+}
+
+/* Materials under thousands of keys: duplicates found in O(n log n), at the right line. */
+static void test_json_many_keys(void **state)
+{
+    const int n = 50000;
+    size_t cap = (size_t)n * 32 + 256, len = 0;
+    char *text = malloc(cap);
+    double t0;
+    int i;
+    (void)state;
+    assert_non_null(text);
+    len += (size_t)snprintf(text + len, cap - len, "{" JCAM ",\n\"materials\": {");
+    for (i = 0; i < n; i++)
+        len += (size_t)snprintf(text + len, cap - len, "%s\"m%d\": {}", i ? ",\n" : "", i);
+    snprintf(text + len, cap - len, ",\n\"m17\": {}}}");
+    t0 = now();
+    json_bad(text, "x.json:50002: ", "materials: duplicate key \"m17\"", "first at line 19", NULL);
+    print_message("%d materials, one duplicate: %.1f ms\n", n, (now() - t0) * 1e3);
+    assert_true(now() - t0 < 2.0);
+    /* the same in an object's own keys */
+    json_bad("{\n" JCAM ",\n\"materials\": {\"m\": {}}, \"objects\": [\n"
+             "{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1, \"material\": \"m\",\n"
+             "\"radius\": 2}]}",
+             "x.json:5: ", "objects[0]: duplicate key \"radius\"", "first at line 4", NULL);
+    free(text);
+}
+
+/* Files: directories, unreadable files, devices, files too large to be a scene. */
+static void test_bad_files(void **state)
+{
+    scene s;
+    char err[512], path[64];
+    int fd;
+    (void)state;
+    /* a directory, even one named like a scene */
+    mkdir("build", 0777);
+    mkdir("build/test-output", 0777);
+    mkdir("build/test-output/dir.nff", 0777);
+    scene_init(&s);
+    assert_int_equal(scene_load("build/test-output/dir.nff", &s, err, sizeof err), -1);
+    assert_non_null(strstr(err, "build/test-output/dir.nff: cannot read: Is a directory"));
+    scene_free(&s);
+    /* a path through a file */
+    scene_init(&s);
+    assert_int_equal(scene_load("scenes/default.json/x.nff", &s, err, sizeof err), -1);
+    assert_non_null(strstr(err, "scenes/default.json/x.nff: cannot open: Not a directory"));
+    scene_free(&s);
+    /* an empty device; a device of NUL bytes, which is not read to its (missing) end */
+    scene_init(&s);
+    assert_int_equal(nff_load("/dev/null", &s, err, sizeof err), -1);
+    assert_non_null(strstr(err, "/dev/null:1: empty file"));
+    scene_free(&s);
+    scene_init(&s);
+    assert_int_equal(json_scene_load("/dev/zero", &s, err, sizeof err), -1);
+    assert_non_null(strstr(err, "/dev/zero:1: unexpected NUL byte"));
+    scene_free(&s);
+    /* a read error after a successful open (as root too): /proc/self/mem at address 0 */
+    scene_init(&s);
+    if (access("/proc/self/mem", F_OK) != 0)
+        print_message("no /proc/self/mem: the read error is not tested\n");
+    else if (nff_load("/proc/self/mem", &s, err, sizeof err) == -1)
+        assert_non_null(strstr(err, "/proc/self/mem: cannot read: "));
+    else
+        fail_msg("/proc/self/mem was read");
+    scene_free(&s);
+    /* no permission: root reads anything, so there only the read error above is tested */
+    snprintf(path, sizeof path, "build/test-output/unreadable-XXXXXX");
+    fd = mkstemp(path);
+    assert_true(fd >= 0);
+    assert_int_equal(write(fd, VIEW, strlen(VIEW)), (long)strlen(VIEW));
+    close(fd);
+    chmod(path, 0);
+    scene_init(&s);
+    if (geteuid() == 0) {
+        print_message("running as root: mode 000 does not make a file unreadable; skipped\n");
+    } else {
+        assert_int_equal(nff_load(path, &s, err, sizeof err), -1);
+        assert_non_null(strstr(err, "cannot open: Permission denied"));
+    }
+    scene_free(&s);
+    unlink(path);
+    /* larger than a scene may be: refused before reading (a sparse file: no disk used) */
+    snprintf(path, sizeof path, "build/test-output/huge-XXXXXX");
+    fd = mkstemp(path);
+    assert_true(fd >= 0);
+    assert_int_equal(ftruncate(fd, (off_t)SCENE_MAX_FILE_BYTES + 1), 0);
+    close(fd);
+    scene_init(&s);
+    assert_int_equal(nff_load(path, &s, err, sizeof err), -1);
+    assert_non_null(strstr(err, "file too large"));
+    scene_free(&s);
+    unlink(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_nff_entities),     cmocka_unit_test(test_nff_camera),
-        cmocka_unit_test(test_nff_lights),       cmocka_unit_test(test_nff_whitespace),
-        cmocka_unit_test(test_nff_load_files),   cmocka_unit_test(test_spd_tetra),
-        cmocka_unit_test(test_spd_all),          cmocka_unit_test(test_nff_bad_entity),
-        cmocka_unit_test(test_nff_bad_counts),   cmocka_unit_test(test_nff_bad_numbers),
-        cmocka_unit_test(test_nff_bad_polygons), cmocka_unit_test(test_nff_bad_view),
-        cmocka_unit_test(test_json_all),         cmocka_unit_test(test_json_projections),
-        cmocka_unit_test(test_json_shipped),     cmocka_unit_test(test_json_bad_syntax),
-        cmocka_unit_test(test_json_bad_keys),    cmocka_unit_test(test_json_bad_values),
-        cmocka_unit_test(test_json_bad_camera),  cmocka_unit_test(test_json_bad_objects),
-        cmocka_unit_test(test_json_lines),       cmocka_unit_test(test_nul_byte),
+        cmocka_unit_test(test_nff_entities),
+        cmocka_unit_test(test_nff_camera),
+        cmocka_unit_test(test_nff_lights),
+        cmocka_unit_test(test_nff_whitespace),
+        cmocka_unit_test(test_nff_load_files),
+        cmocka_unit_test(test_spd_tetra),
+        cmocka_unit_test(test_spd_all),
+        cmocka_unit_test(test_nff_bad_entity),
+        cmocka_unit_test(test_nff_bad_counts),
+        cmocka_unit_test(test_nff_bad_numbers),
+        cmocka_unit_test(test_nff_bad_polygons),
+        cmocka_unit_test(test_nff_bad_view),
+        cmocka_unit_test(test_json_all),
+        cmocka_unit_test(test_json_projections),
+        cmocka_unit_test(test_json_shipped),
+        cmocka_unit_test(test_json_bad_syntax),
+        cmocka_unit_test(test_json_bad_keys),
+        cmocka_unit_test(test_json_bad_values),
+        cmocka_unit_test(test_json_bad_camera),
+        cmocka_unit_test(test_json_bad_objects),
+        cmocka_unit_test(test_json_lines),
+        cmocka_unit_test(test_nul_byte),
         cmocka_unit_test(test_fixture_files),
+        cmocka_unit_test(test_nff_bad_nonfinite),
+        cmocka_unit_test(test_json_bad_nonfinite),
+        cmocka_unit_test(test_tiny_numbers),
+        cmocka_unit_test(test_bad_image_size),
+        cmocka_unit_test(test_nff_bad_absurd_counts),
+        cmocka_unit_test(test_bad_camera_vectors),
+        cmocka_unit_test(test_nff_bad_degenerate),
+        cmocka_unit_test(test_binary_garbage),
+        cmocka_unit_test(test_json_many_keys),
+        cmocka_unit_test(test_bad_files),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
