@@ -157,7 +157,7 @@ $(BUILD)/imgtool: tools/imgtool.c $(LIB_OBJ)
 
 quality: $(BUILD)/clwhitted $(BUILD)/imgtool
 	tools/quality-report --figure docs/quality/quality.png --table docs/quality/quality.md \
-	    --readme README.md $(QUALITY_ARGS) $(QUALITY_SCENES)
+	    --readme README.md -W 256 -H 256 $(QUALITY_ARGS) $(QUALITY_SCENES)
 
 # ---- Robustness: fuzzing and the sanitizer build ----------------------------------------------
 #   make fuzz [FUZZ_SECONDS=60]  builds a libFuzzer target per scene reader (clang,
