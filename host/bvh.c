@@ -403,3 +403,111 @@ double bvh_sah_cost(const bvh *b)
     }
     return sum;
 }
+
+/* ---- the 4-wide tree ------------------------------------------------------------------ */
+
+static double node_area(const cw_bvh_node *n)
+{
+    double dx = (double)n->hi[0] - n->lo[0], dy = (double)n->hi[1] - n->lo[1],
+           dz = (double)n->hi[2] - n->lo[2];
+    if (!(dx >= 0) || !(dy >= 0) || !(dz >= 0))
+        return 0;
+    return dx * dy + dy * dz + dz * dx;
+}
+
+static void f4_set(cw_float4 *v, int i, float x)
+{
+    if (i == 0)
+        v->x = x;
+    else if (i == 1)
+        v->y = x;
+    else if (i == 2)
+        v->z = x;
+    else
+        v->w = x;
+}
+
+static void set_lane(cw_bvh4_node *q, int i, const cw_bvh_node *n)
+{
+    f4_set(&q->lo_x, i, n ? n->lo[0] : 0.0f);
+    f4_set(&q->lo_y, i, n ? n->lo[1] : 0.0f);
+    f4_set(&q->lo_z, i, n ? n->lo[2] : 0.0f);
+    f4_set(&q->hi_x, i, n ? n->hi[0] : 0.0f);
+    f4_set(&q->hi_y, i, n ? n->hi[1] : 0.0f);
+    f4_set(&q->hi_z, i, n ? n->hi[2] : 0.0f);
+}
+
+/* Builds the 4-wide node for binary node i2 at out->nodes[out->num_nodes++]; returns
+ * its index and sets *need to the stack entries its subtree's traversal needs. The
+ * recursion is as deep as the binary tree (at most BVH_MAX_DEPTH). */
+static int collapse(const cw_bvh_node *n2, int i2, bvh4 *out, int *need)
+{
+    int slots[4], ns = 0, k = out->num_nodes++, i, interior = 0, deepest = 0;
+    cw_bvh4_node *q;
+
+    if (n2[i2].count > 0) {
+        slots[ns++] = i2;
+    } else {
+        slots[ns++] = i2 + 1;
+        slots[ns++] = n2[i2].start;
+        while (ns < 4) {
+            int best = -1;
+            double best_area = -1;
+            for (i = 0; i < ns; i++)
+                if (n2[slots[i]].count <= 0 && node_area(&n2[slots[i]]) > best_area) {
+                    best = i;
+                    best_area = node_area(&n2[slots[i]]);
+                }
+            if (best < 0)
+                break;
+            slots[ns++] = n2[slots[best]].start;
+            slots[best] = slots[best] + 1;
+        }
+    }
+    for (i = 0; i < 4; i++) {
+        q = &out->nodes[k];
+        if (i >= ns) {
+            set_lane(q, i, NULL);
+            q->child[i] = 0;
+            q->count[i] = -1;
+        } else if (n2[slots[i]].count > 0) {
+            set_lane(q, i, &n2[slots[i]]);
+            q->child[i] = n2[slots[i]].start;
+            q->count[i] = n2[slots[i]].count;
+        } else {
+            int sub = 0, c;
+            set_lane(q, i, &n2[slots[i]]);
+            q->count[i] = 0;
+            c = collapse(n2, slots[i], out, &sub);
+            out->nodes[k].child[i] = c;
+            interior++;
+            if (sub > deepest)
+                deepest = sub;
+        }
+    }
+    /* going down one interior child leaves the others on the stack */
+    *need = (interior > 1 ? interior - 1 : 0) + deepest;
+    return k;
+}
+
+int bvh_collapse4(const bvh *b, bvh4 *out, char *err, size_t errlen)
+{
+    int need = 0;
+    memset(out, 0, sizeof *out);
+    if (b->num_nodes == 0)
+        return 0;
+    out->nodes = calloc((size_t)b->num_nodes, sizeof *out->nodes);
+    if (!out->nodes) {
+        snprintf(err, errlen, "out of memory for the 4-wide BVH (%d nodes)", b->num_nodes);
+        return -1;
+    }
+    collapse(b->nodes, 0, out, &need);
+    out->stack_need = need + 1;
+    return 0;
+}
+
+void bvh4_free(bvh4 *b)
+{
+    free(b->nodes);
+    memset(b, 0, sizeof *b);
+}

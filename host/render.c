@@ -36,6 +36,7 @@ _Static_assert(sizeof(cw_frame) == 192, "cw_frame layout");
 _Static_assert(sizeof(cw_ray) == 64, "cw_ray layout");
 _Static_assert(sizeof(cw_hit) == 32, "cw_hit layout");
 _Static_assert(sizeof(cw_bvh_node) == 32, "cw_bvh_node layout");
+_Static_assert(sizeof(cw_bvh4_node) == 128, "cw_bvh4_node layout");
 
 /* What the scene uses, decided once at upload: the kernel features come from it. */
 typedef struct {
@@ -489,6 +490,7 @@ typedef struct {
     int *refs;    /* BVH leaf entries as CW_REFs */
     int nsph, ntri, nnorm, npg, ncone, nbox;
     bvh tree;
+    bvh4 tree4;
 } device_scene;
 
 static void device_scene_free(device_scene *ds)
@@ -505,6 +507,7 @@ static void device_scene_free(device_scene *ds)
     free(ds->box_ref);
     free(ds->refs);
     bvh_free(&ds->tree);
+    bvh4_free(&ds->tree4);
 }
 
 static void box_empty(bvh_box *b)
@@ -707,15 +710,18 @@ static int convert_scene(const scene *s, device_scene *ds, scene_features *ft, c
     return 0;
 }
 
-/* Builds the BVH over the primitives' boxes and turns its leaf entries into CW_REFs. */
+/* Builds the BVH over the primitives' boxes, collapses it to the 4-wide tree the kernels
+ * traverse, and turns its leaf entries into CW_REFs. */
 static int build_bvh(device_scene *ds, char *err, size_t errlen)
 {
     int i;
-    if (bvh_build(&ds->tree, ds->boxes, ds->nbox, 4, err, errlen) != 0)
+    if (bvh_build(&ds->tree, ds->boxes, ds->nbox, 4, err, errlen) != 0 ||
+        bvh_collapse4(&ds->tree, &ds->tree4, err, errlen) != 0)
         return -1;
-    if (ds->tree.num_nodes > 0 && ds->tree.depth > 63) {
-        snprintf(err, errlen, "BVH depth %d exceeds the kernels' traversal stack of 64",
-                 ds->tree.depth);
+    if (ds->tree4.stack_need > CW_BVH_STACK) {
+        snprintf(err, errlen,
+                 "the BVH needs a traversal stack of %d entries, more than the kernels' %d",
+                 ds->tree4.stack_need, CW_BVH_STACK);
         return -1;
     }
     ds->refs = malloc(((size_t)ds->tree.num_refs + 1) * sizeof *ds->refs);
@@ -775,14 +781,14 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     f->num_polygons = ds.npg;
     f->num_cones = ds.ncone;
     f->num_lights = (int)s->lights.count;
-    f->num_nodes = ds.tree.num_nodes;
+    f->num_nodes = ds.tree4.num_nodes;
     f->spd_rays = r->settings.spd;
 
     if (ensure_program(r, err, errlen) != 0)
         goto out_free;
     t0 = seconds_now();
     if (upload(r, &r->frame, f, 1, sizeof *f, "frame", err, errlen) ||
-        upload(r, &r->nodes, ds.tree.nodes, (size_t)ds.tree.num_nodes, sizeof(cw_bvh_node),
+        upload(r, &r->nodes, ds.tree4.nodes, (size_t)ds.tree4.num_nodes, sizeof(cw_bvh4_node),
                "BVH nodes", err, errlen) ||
         upload(r, &r->refs, ds.refs, (size_t)ds.tree.num_refs, sizeof(int), "BVH references", err,
                errlen) ||

@@ -18,7 +18,7 @@
 #endif
 
 #define CW_WORLD_ARGS                                                                              \
-    __global const cw_frame *f, __global const cw_bvh_node *nodes, __global const int *refs,       \
+    __global const cw_frame *f, __global const cw_bvh4_node *nodes, __global const int *refs,      \
         __global const cw_sphere *spheres, __global const cw_triangle *triangles,                  \
         __global const float4 *normals, __global const cw_polygon *polygons,                       \
         __global const float4 *poly_verts, __global const cw_cone *cones

@@ -58,6 +58,33 @@ CW_INLINE vec3 v3_norm(vec3 a)
 {
     return normalize(a);
 }
+/* 4-wide: the four lanes of one box test of the 4-wide BVH */
+typedef float4 v4;
+CW_INLINE v4 v4_splat(float a)
+{
+    return (float4)(a);
+}
+CW_INLINE v4 v4_sub(v4 a, v4 b)
+{
+    return a - b;
+}
+CW_INLINE v4 v4_mul(v4 a, v4 b)
+{
+    return a * b;
+}
+/* min and max without fmin/fmax's NaN rules (the box test never sees a NaN) */
+CW_INLINE v4 v4_min(v4 a, v4 b)
+{
+    return a < b ? a : b;
+}
+CW_INLINE v4 v4_max(v4 a, v4 b)
+{
+    return a > b ? a : b;
+}
+CW_INLINE float v4_get(v4 a, int i)
+{
+    return i == 0 ? a.x : (i == 1 ? a.y : (i == 2 ? a.z : a.w));
+}
 #define cw_sqrt(x) sqrt(x)
 #define cw_fabs(x) fabs(x)
 #define cw_fmax(a, b) fmax((a), (b))
@@ -163,6 +190,49 @@ CW_INLINE float v3_len(vec3 a)
 CW_INLINE vec3 v3_norm(vec3 a)
 {
     return v3_scale(a, 1.0f / v3_len(a));
+}
+typedef cw_float4 v4;
+CW_INLINE v4 v4_splat(float a)
+{
+    v4 r;
+    r.x = r.y = r.z = r.w = a;
+    return r;
+}
+CW_INLINE v4 v4_sub(v4 a, v4 b)
+{
+    a.x -= b.x;
+    a.y -= b.y;
+    a.z -= b.z;
+    a.w -= b.w;
+    return a;
+}
+CW_INLINE v4 v4_mul(v4 a, v4 b)
+{
+    a.x *= b.x;
+    a.y *= b.y;
+    a.z *= b.z;
+    a.w *= b.w;
+    return a;
+}
+CW_INLINE v4 v4_min(v4 a, v4 b)
+{
+    a.x = a.x < b.x ? a.x : b.x;
+    a.y = a.y < b.y ? a.y : b.y;
+    a.z = a.z < b.z ? a.z : b.z;
+    a.w = a.w < b.w ? a.w : b.w;
+    return a;
+}
+CW_INLINE v4 v4_max(v4 a, v4 b)
+{
+    a.x = a.x > b.x ? a.x : b.x;
+    a.y = a.y > b.y ? a.y : b.y;
+    a.z = a.z > b.z ? a.z : b.z;
+    a.w = a.w > b.w ? a.w : b.w;
+    return a;
+}
+CW_INLINE float v4_get(v4 a, int i)
+{
+    return i == 0 ? a.x : (i == 1 ? a.y : (i == 2 ? a.z : a.w));
 }
 #define cw_sqrt(x) sqrtf(x)
 #define cw_fabs(x) fabsf(x)

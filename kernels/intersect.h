@@ -26,8 +26,7 @@
 
 /* Finite stand-ins for infinity: the fast path is built with -cl-fast-relaxed-math,
  * which lets the compiler assume no value is infinite. */
-#define CW_FAR 1e30f  /* tmax of camera and secondary rays */
-#define CW_MISS 3e38f /* the box test's answer for a miss */
+#define CW_FAR 1e30f /* tmax of camera and secondary rays */
 
 /* The scene as the kernels see it. */
 typedef struct {
@@ -37,8 +36,8 @@ typedef struct {
     CW_GLOBAL const cw_polygon *polygons;
     CW_GLOBAL const cw_float4 *poly_verts;
     CW_GLOBAL const cw_cone *cones;
-    CW_GLOBAL const cw_bvh_node *nodes;
-    CW_GLOBAL const int *refs; /* BVH leaf entries: CW_REF(kind, index) */
+    CW_GLOBAL const cw_bvh4_node *nodes; /* the 4-wide BVH */
+    CW_GLOBAL const int *refs;           /* BVH leaf entries: CW_REF(kind, index) */
     int num_nodes;
 } cw_world;
 
@@ -351,38 +350,6 @@ CW_INLINE int isect_cone(CW_GLOBAL const cw_cone *cn, vec3 o, vec3 d, float tmin
         return 1;
     }
     return 0;
-}
-
-/* Ray-box slab test against [tmin, tmax]; returns the entry distance, or CW_MISS for a
- * miss. The robust path widens the exit distance by 1 + 2 gamma(3) (Ize 2013), so that
- * rounding never culls a box the ray touches. */
-/* min and max without fmin/fmax's NaN rules, which compile to compare-and-blend
- * sequences: the box test never sees a NaN (the inverse direction is finite and scene
- * values are checked at load), and these become single min/max instructions. */
-CW_INLINE float isect_min(float a, float b)
-{
-    return a < b ? a : b;
-}
-
-CW_INLINE float isect_max(float a, float b)
-{
-    return a > b ? a : b;
-}
-
-CW_INLINE float isect_box(CW_GLOBAL const cw_bvh_node *nd, const cw_rayinfo *ri, float tmin,
-                          float tmax)
-{
-    float tx0 = (nd->lo[0] - ri->o.x) * ri->inv.x, tx1 = (nd->hi[0] - ri->o.x) * ri->inv.x;
-    float ty0 = (nd->lo[1] - ri->o.y) * ri->inv.y, ty1 = (nd->hi[1] - ri->o.y) * ri->inv.y;
-    float tz0 = (nd->lo[2] - ri->o.z) * ri->inv.z, tz1 = (nd->hi[2] - ri->o.z) * ri->inv.z;
-    float t0 = isect_max(isect_max(isect_min(tx0, tx1), isect_min(ty0, ty1)),
-                         isect_max(isect_min(tz0, tz1), tmin));
-    float t1 = isect_min(isect_min(isect_max(tx0, tx1), isect_max(ty0, ty1)),
-                         isect_min(isect_max(tz0, tz1), tmax));
-#if !CW_FAST
-    t1 *= 1.0000004f;
-#endif
-    return t0 <= t1 ? t0 : CW_MISS;
 }
 
 #endif

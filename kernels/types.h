@@ -63,6 +63,18 @@ typedef struct {
     int count; /* leaf: number of primitives (> 0); interior: -(split axis) (0, -1, -2) */
 } cw_bvh_node;
 
+/* Entries of the kernels' BVH traversal stack (the host checks its tree needs no more). */
+#define CW_BVH_STACK 96
+
+/* A node of the 4-wide BVH the kernels traverse, collapsed from the binary one: the
+ * boxes of up to four children side by side, for one 4-wide box test. */
+typedef struct {
+    cw_float4 lo_x, lo_y, lo_z; /* lower corners of the four child boxes */
+    cw_float4 hi_x, hi_y, hi_z; /* upper corners */
+    int child[4]; /* interior child: its node index; leaf child: first entry in refs */
+    int count[4]; /* leaf child: number of references (> 0); interior: 0; empty slot: -1 */
+} cw_bvh4_node;
+
 typedef struct {
     cw_float4 ka; /* rgb ambient, w: Phong exponent p */
     cw_float4 kd; /* rgb diffuse */
