@@ -837,10 +837,110 @@ static void test_million_triangles(void **state)
     free(b);
 }
 
+/* Lane i of a cw_float4. */
+static float lane(cw_float4 v, int i)
+{
+    return i == 0 ? v.x : (i == 1 ? v.y : (i == 2 ? v.z : v.w));
+}
+
+/* Walks the 4-wide tree from node k: every lane's box must equal the binary node it came
+ * from (checked through containment of what lies below), every primitive must be reached
+ * once, and the stack a traversal needs must stay within what bvh_collapse4 reports. */
+static int walk4(const bvh4 *q, const bvh *t, const bvh_box *boxes, int k, int *seen, int *reached)
+{
+    int i, need = 0, deepest = 0, interior = 0;
+    const cw_bvh4_node *nd = &q->nodes[k];
+    assert_true(k >= 0 && k < q->num_nodes);
+    for (i = 0; i < 4; i++) {
+        int c = nd->count[i], j;
+        float lo[3], hi[3];
+        if (c < 0)
+            continue;
+        lo[0] = lane(nd->lo_x, i);
+        lo[1] = lane(nd->lo_y, i);
+        lo[2] = lane(nd->lo_z, i);
+        hi[0] = lane(nd->hi_x, i);
+        hi[1] = lane(nd->hi_y, i);
+        hi[2] = lane(nd->hi_z, i);
+        if (c > 0) {
+            for (j = nd->child[i]; j < nd->child[i] + c; j++) {
+                int p = t->refs[j], a;
+                assert_true(p >= 0 && p < t->num_refs);
+                seen[p]++;
+                (*reached)++;
+                for (a = 0; a < 3; a++) {
+                    assert_true(boxes[p].lo[a] >= lo[a]);
+                    assert_true(boxes[p].hi[a] <= hi[a]);
+                }
+            }
+        } else {
+            const cw_bvh4_node *ch = &q->nodes[nd->child[i]];
+            int l, a;
+            assert_true(nd->child[i] > k); /* depth-first: children come later */
+            for (l = 0; l < 4; l++) {
+                float clo[3], chi[3];
+                if (ch->count[l] < 0)
+                    continue;
+                clo[0] = lane(ch->lo_x, l);
+                clo[1] = lane(ch->lo_y, l);
+                clo[2] = lane(ch->lo_z, l);
+                chi[0] = lane(ch->hi_x, l);
+                chi[1] = lane(ch->hi_y, l);
+                chi[2] = lane(ch->hi_z, l);
+                for (a = 0; a < 3; a++) {
+                    assert_true(clo[a] >= lo[a]);
+                    assert_true(chi[a] <= hi[a]);
+                }
+            }
+            interior++;
+            need = walk4(q, t, boxes, nd->child[i], seen, reached);
+            if (need > deepest)
+                deepest = need;
+        }
+    }
+    return (interior > 1 ? interior - 1 : 0) + deepest;
+}
+
+static void test_collapse4(void **state)
+{
+    static const int sizes[] = {0, 1, 2, 5, 17, 1000, 100000};
+    char err[256];
+    size_t s;
+    (void)state;
+    for (s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+        int n = sizes[s], reached = 0, i, need;
+        bvh_box *boxes = random_boxes(n, 100 + (uint64_t)n, 100.0f, 1.0f);
+        int *seen = calloc((size_t)n + 1, sizeof *seen);
+        bvh t;
+        bvh4 q;
+        assert_non_null(seen);
+        build_ok(&t, boxes, n, 4);
+        assert_int_equal(bvh_collapse4(&t, &q, err, sizeof err), 0);
+        if (n == 0) {
+            assert_int_equal(q.num_nodes, 0);
+        } else {
+            assert_true(q.num_nodes >= 1 && q.num_nodes <= t.num_nodes);
+            need = walk4(&q, &t, boxes, 0, seen, &reached) + 1;
+            assert_int_equal(reached, n);
+            for (i = 0; i < n; i++)
+                assert_int_equal(seen[i], 1);
+            assert_int_equal(need, q.stack_need);
+            assert_true(q.stack_need <= CW_BVH_STACK);
+        }
+        printf("  4-wide: %d primitives, %d binary nodes -> %d 4-wide nodes, stack %d\n", n,
+               t.num_nodes, q.num_nodes, q.stack_need);
+        bvh4_free(&q);
+        bvh_free(&t);
+        free(seen);
+        free(boxes);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_collapse4),
         cmocka_unit_test(test_empty_and_tiny),
         cmocka_unit_test(test_random_invariants),
         cmocka_unit_test(test_degenerate_invariants),
