@@ -63,6 +63,8 @@ static void usage(FILE *f)
             "\n"
             "Environment:\n"
             "  CLWHITTED_BUILD_OPTIONS  extra OpenCL kernel build options (default: none)\n"
+            "  CLWHITTED_CACHE_DIR      built kernel binaries, so a second run skips the compiler\n"
+            "                           (default: ~/.cache/clwhitted; empty: no cache)\n"
             "  CLWHITTED_PROGRESS       progress bar: always, never, or auto (default: auto,\n"
             "                           when stderr is a terminal)\n"
             "  POCL_DEVICES             PoCL device drivers to offer, e.g. pthread or basic\n"

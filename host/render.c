@@ -14,6 +14,7 @@
 #include "bvh.h"
 #include "intersect.h"
 #include "clerr.h"
+#include "progcache.h"
 
 static double seconds_now(void)
 {
@@ -365,10 +366,15 @@ static int build_program(renderer *r, const char *options, char *err, size_t err
         return 0;
     release_program(r);
     t0 = seconds_now();
+    r->program = progcache_load(r->ctx, r->device, src, options);
+    if (r->program)
+        goto out_kernels;
     r->program = clCreateProgramWithSource(r->ctx, 1, &src, NULL, &e);
     if (e != CL_SUCCESS)
         return cl_fail(e, "clCreateProgramWithSource", r, err, errlen);
     e = clBuildProgram(r->program, 1, &r->device, options, NULL, NULL);
+    if (e == CL_SUCCESS)
+        progcache_store(r->program, r->device, src, options);
     if (e != CL_SUCCESS) {
         size_t len = 0;
         char *log;
@@ -388,6 +394,7 @@ static int build_program(renderer *r, const char *options, char *err, size_t err
         release_program(r);
         return -1;
     }
+out_kernels:
     r->k_raygen = clCreateKernel(r->program, "cw_raygen", &e);
     if (e == CL_SUCCESS)
         r->k_intersect = clCreateKernel(r->program, "cw_intersect", &e);
