@@ -30,7 +30,9 @@ _Static_assert(sizeof(cw_sphere) == 32, "cw_sphere layout");
 _Static_assert(sizeof(cw_triangle) == 64, "cw_triangle layout");
 _Static_assert(sizeof(cw_cone) == 48, "cw_cone layout");
 _Static_assert(sizeof(cw_shadow_ray) == 64, "cw_shadow_ray layout");
-_Static_assert(sizeof(cw_polygon) == 32, "cw_polygon layout");
+_Static_assert(sizeof(cw_polygon) == 48, "cw_polygon layout");
+
+#define CW_WORLD_NARGS 10 /* CW_WORLD_ARGS in kernels/clwhitted.cl */
 _Static_assert(sizeof(cw_material) == 80, "cw_material layout");
 _Static_assert(sizeof(cw_light) == 32, "cw_light layout");
 _Static_assert(sizeof(cw_frame) == 192, "cw_frame layout");
@@ -57,7 +59,7 @@ struct renderer {
     cl_ulong max_alloc;  /* CL_DEVICE_MAX_MEM_ALLOC_SIZE */
     cl_ulong global_mem; /* CL_DEVICE_GLOBAL_MEM_SIZE */
     /* scene buffers */
-    cl_mem frame, nodes, refs, spheres, triangles, normals, polygons, verts, cones, lights,
+    cl_mem frame, nodes, refs, spheres, triangles, normals, polygons, verts, bands, cones, lights,
         materials;
     int have_scene;
     cw_frame host_frame;
@@ -267,6 +269,7 @@ static void release_scene(renderer *r)
     release_mem(&r->normals);
     release_mem(&r->polygons);
     release_mem(&r->verts);
+    release_mem(&r->bands);
     release_mem(&r->cones);
     release_mem(&r->lights);
     release_mem(&r->materials);
@@ -495,6 +498,8 @@ typedef struct {
     bvh_box *boxes;
     int *box_ref; /* box i bounds primitive box_ref[i] (a CW_REF) */
     int *refs;    /* BVH leaf entries as CW_REFs */
+    int *bands;   /* edge bands of large polygons (cw_polygon) */
+    size_t nbands, bands_cap;
     int nsph, ntri, nnorm, npg, ncone, nbox;
     bvh tree;
     bvh4 tree4;
@@ -507,6 +512,7 @@ static void device_scene_free(device_scene *ds)
     free(ds->normals);
     free(ds->pg);
     free(ds->verts);
+    free(ds->bands);
     free(ds->cones);
     free(ds->lights);
     free(ds->mats);
@@ -566,6 +572,82 @@ static int push_box(device_scene *ds, const bvh_box *b, int ref)
     ds->boxes[ds->nbox] = bb;
     ds->box_ref[ds->nbox] = ref;
     ds->nbox++;
+    return 0;
+}
+
+static int bands_push(device_scene *ds, int v)
+{
+    if (ds->nbands == ds->bands_cap) {
+        size_t cap = ds->bands_cap ? 2 * ds->bands_cap : 1024;
+        int *nb = realloc(ds->bands, cap * sizeof *nb);
+        if (!nb)
+            return -1;
+        ds->bands = nb;
+        ds->bands_cap = cap;
+    }
+    ds->bands[ds->nbands++] = v;
+    return 0;
+}
+
+/* The band of projected coordinate y, computed exactly as the kernel computes it. */
+static int band_of(const cw_polygon *pg, float y)
+{
+    return (int)((y - pg->band_lo) * pg->band_scale);
+}
+
+/* Edge bands for a polygon of many vertices (its vertices already projected): the range
+ * of the second projected coordinate is cut into count/4 bands, and each band lists the
+ * edges whose range meets it (one band of margin each side, against rounding), so that the
+ * inside test reads a few edges instead of all. A polygon whose edges would be listed too
+ * often (long edges across many bands) keeps band_count 0: every edge is tested. */
+static int polygon_bands(device_scene *ds, cw_polygon *pg)
+{
+    const cw_float4 *v = &ds->verts[pg->first];
+    int n = pg->count, nb = n / 4, k, b, total = 0;
+    float lo = v[0].y, hi = v[0].y;
+    size_t table;
+
+    pg->band_count = 0;
+    pg->band_first = 0;
+    pg->band_lo = 0.0f;
+    pg->band_scale = 0.0f;
+    if (n < 32)
+        return 0;
+    for (k = 1; k < n; k++) {
+        lo = fminf(lo, v[k].y);
+        hi = fmaxf(hi, v[k].y);
+    }
+    if (!(hi > lo))
+        return 0;
+    pg->band_lo = lo;
+    pg->band_scale = (float)nb / (hi - lo);
+    pg->band_count = nb;
+    for (k = 0; k < n; k++) {
+        int ka = k == 0 ? n - 1 : k - 1;
+        int b0 = band_of(pg, fminf(v[ka].y, v[k].y)) - 1,
+            b1 = band_of(pg, fmaxf(v[ka].y, v[k].y)) + 1;
+        total += (b1 < nb ? b1 : nb - 1) - (b0 > 0 ? b0 : 0) + 1;
+    }
+    if (total > 8 * n) {
+        pg->band_count = 0;
+        return 0;
+    }
+    table = ds->nbands;
+    pg->band_first = (int)table;
+    for (b = 0; b < 2 * nb; b++)
+        if (bands_push(ds, 0) != 0)
+            return -1;
+    for (b = 0; b < nb; b++) {
+        ds->bands[table + 2 * (size_t)b] = (int)ds->nbands;
+        for (k = 0; k < n; k++) {
+            int ka = k == 0 ? n - 1 : k - 1;
+            int b0 = band_of(pg, fminf(v[ka].y, v[k].y)) - 1;
+            int b1 = band_of(pg, fmaxf(v[ka].y, v[k].y)) + 1;
+            if (b >= b0 && b <= b1 && bands_push(ds, pg->first + k) != 0)
+                return -1;
+        }
+        ds->bands[table + 2 * (size_t)b + 1] = (int)ds->nbands - ds->bands[table + 2 * (size_t)b];
+    }
     return 0;
 }
 
@@ -656,6 +738,10 @@ static int convert_scene(const scene *s, device_scene *ds, scene_features *ft, c
                 vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
                 ds->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
             }
+        }
+        if (polygon_bands(ds, pg) != 0) {
+            snprintf(err, errlen, "out of memory for polygon edge bands");
+            return -1;
         }
         box_empty(&b);
         for (j = 0; j < sp->count; j++)
@@ -807,6 +893,8 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
         upload(r, &r->polygons, ds.pg, (size_t)ds.npg, sizeof *ds.pg, "polygons", err, errlen) ||
         upload(r, &r->verts, ds.verts, s->poly_verts.count, sizeof *ds.verts, "polygon vertices",
                err, errlen) ||
+        upload(r, &r->bands, ds.bands, ds.nbands, sizeof *ds.bands, "polygon edge bands", err,
+               errlen) ||
         upload(r, &r->cones, ds.cones, (size_t)ds.ncone, sizeof *ds.cones, "cones", err, errlen) ||
         upload(r, &r->lights, ds.lights, s->lights.count, sizeof *ds.lights, "lights", err,
                errlen) ||
@@ -867,10 +955,10 @@ static int set_mem(cl_kernel k, cl_uint i, cl_mem *m, const char *kname, const r
 }
 
 /* Sets the frame and scene arguments shared by the intersect, shade and occlude kernels:
- * indices 0..8 (CW_WORLD_ARGS). */
+ * indices 0..CW_WORLD_NARGS-1 (CW_WORLD_ARGS). */
 static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err, size_t errlen)
 {
-    cl_mem *m[9];
+    cl_mem *m[CW_WORLD_NARGS];
     cl_uint i;
     m[0] = &r->frame;
     m[1] = &r->nodes;
@@ -880,8 +968,9 @@ static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err
     m[5] = &r->normals;
     m[6] = &r->polygons;
     m[7] = &r->verts;
-    m[8] = &r->cones;
-    for (i = 0; i < 9; i++)
+    m[8] = &r->bands;
+    m[9] = &r->cones;
+    for (i = 0; i < CW_WORLD_NARGS; i++)
         if (set_mem(k, i, m[i], kname, r, err, errlen))
             return -1;
     return 0;
@@ -1015,10 +1104,10 @@ static int run_intersect(renderer *r, cl_mem *rays, cl_int n, char *err, size_t 
     if (ensure_buffer(r, &r->hits, &r->hit_cap, (size_t)n * sizeof(cw_hit), "hits", err, errlen))
         return -1;
     return set_world_args(r, r->k_intersect, k, err, errlen) ||
-           set_mem(r->k_intersect, 9, rays, k, r, err, errlen) ||
-           set_mem(r->k_intersect, 10, &r->hits, k, r, err, errlen) ||
-           set_mem(r->k_intersect, 11, &r->counters, k, r, err, errlen) ||
-           set_arg(r->k_intersect, 12, sizeof n, &n, k, r, err, errlen) ||
+           set_mem(r->k_intersect, CW_WORLD_NARGS + 0, rays, k, r, err, errlen) ||
+           set_mem(r->k_intersect, CW_WORLD_NARGS + 1, &r->hits, k, r, err, errlen) ||
+           set_mem(r->k_intersect, CW_WORLD_NARGS + 2, &r->counters, k, r, err, errlen) ||
+           set_arg(r->k_intersect, CW_WORLD_NARGS + 3, sizeof n, &n, k, r, err, errlen) ||
            launch(r, r->k_intersect, (size_t)n, k, err, errlen);
 }
 
@@ -1026,15 +1115,15 @@ static int run_shade(renderer *r, cl_mem *rays, cl_mem *out, cl_int n, char *err
 {
     const char *k = "cw_shade";
     return set_world_args(r, r->k_shade, k, err, errlen) ||
-           set_mem(r->k_shade, 9, &r->lights, k, r, err, errlen) ||
-           set_mem(r->k_shade, 10, &r->materials, k, r, err, errlen) ||
-           set_mem(r->k_shade, 11, rays, k, r, err, errlen) ||
-           set_mem(r->k_shade, 12, &r->hits, k, r, err, errlen) ||
-           set_mem(r->k_shade, 13, &r->image, k, r, err, errlen) ||
-           set_mem(r->k_shade, 14, out, k, r, err, errlen) ||
-           set_mem(r->k_shade, 15, &r->shadows, k, r, err, errlen) ||
-           set_mem(r->k_shade, 16, &r->counters, k, r, err, errlen) ||
-           set_arg(r->k_shade, 17, sizeof n, &n, k, r, err, errlen) ||
+           set_mem(r->k_shade, CW_WORLD_NARGS + 0, &r->lights, k, r, err, errlen) ||
+           set_mem(r->k_shade, CW_WORLD_NARGS + 1, &r->materials, k, r, err, errlen) ||
+           set_mem(r->k_shade, CW_WORLD_NARGS + 2, rays, k, r, err, errlen) ||
+           set_mem(r->k_shade, CW_WORLD_NARGS + 3, &r->hits, k, r, err, errlen) ||
+           set_mem(r->k_shade, CW_WORLD_NARGS + 4, &r->image, k, r, err, errlen) ||
+           set_mem(r->k_shade, CW_WORLD_NARGS + 5, out, k, r, err, errlen) ||
+           set_mem(r->k_shade, CW_WORLD_NARGS + 6, &r->shadows, k, r, err, errlen) ||
+           set_mem(r->k_shade, CW_WORLD_NARGS + 7, &r->counters, k, r, err, errlen) ||
+           set_arg(r->k_shade, CW_WORLD_NARGS + 8, sizeof n, &n, k, r, err, errlen) ||
            launch(r, r->k_shade, (size_t)n, k, err, errlen);
 }
 
@@ -1042,10 +1131,10 @@ static int run_occlude(renderer *r, cl_int n, char *err, size_t errlen)
 {
     const char *k = "cw_occlude";
     return set_world_args(r, r->k_occlude, k, err, errlen) ||
-           set_mem(r->k_occlude, 9, &r->shadows, k, r, err, errlen) ||
-           set_mem(r->k_occlude, 10, &r->image, k, r, err, errlen) ||
-           set_mem(r->k_occlude, 11, &r->counters, k, r, err, errlen) ||
-           set_arg(r->k_occlude, 12, sizeof n, &n, k, r, err, errlen) ||
+           set_mem(r->k_occlude, CW_WORLD_NARGS + 0, &r->shadows, k, r, err, errlen) ||
+           set_mem(r->k_occlude, CW_WORLD_NARGS + 1, &r->image, k, r, err, errlen) ||
+           set_mem(r->k_occlude, CW_WORLD_NARGS + 2, &r->counters, k, r, err, errlen) ||
+           set_arg(r->k_occlude, CW_WORLD_NARGS + 3, sizeof n, &n, k, r, err, errlen) ||
            launch(r, r->k_occlude, (size_t)n, k, err, errlen);
 }
 

@@ -26,7 +26,8 @@ CW_INLINE void bvh_test_ref(const cw_world *w, int ref, const cw_rayinfo *ri, fl
 #endif
 #if CW_HAS_POLYGONS
     if (kind == CW_PRIM_POLYGON)
-        got = isect_polygon(&w->polygons[index], w->poly_verts, ri->o, ri->d, tmin, *tmax, &t);
+        got = isect_polygon(&w->polygons[index], w->poly_verts, w->poly_bands, ri->o, ri->d, tmin,
+                            *tmax, &t);
 #endif
 #if CW_HAS_CONES
     if (kind == CW_PRIM_CONE)

@@ -21,7 +21,8 @@
     __global const cw_frame *f, __global const cw_bvh4_node *nodes, __global const int *refs,      \
         __global const cw_sphere *spheres, __global const cw_triangle *triangles,                  \
         __global const float4 *normals, __global const cw_polygon *polygons,                       \
-        __global const float4 *poly_verts, __global const cw_cone *cones
+        __global const float4 *poly_verts, __global const int *poly_bands,                         \
+        __global const cw_cone *cones
 
 #define CW_MAKE_WORLD(w)                                                                           \
     do {                                                                                           \
@@ -30,6 +31,7 @@
         (w).normals = normals;                                                                     \
         (w).polygons = polygons;                                                                   \
         (w).poly_verts = poly_verts;                                                               \
+        (w).poly_bands = poly_bands;                                                               \
         (w).cones = cones;                                                                         \
         (w).nodes = nodes;                                                                         \
         (w).refs = refs;                                                                           \

@@ -35,6 +35,7 @@ typedef struct {
     CW_GLOBAL const cw_float4 *normals; /* vertex normals of smooth triangles */
     CW_GLOBAL const cw_polygon *polygons;
     CW_GLOBAL const cw_float4 *poly_verts;
+    CW_GLOBAL const int *poly_bands; /* edge bands of large polygons (cw_polygon) */
     CW_GLOBAL const cw_cone *cones;
     CW_GLOBAL const cw_bvh4_node *nodes; /* the 4-wide BVH */
     CW_GLOBAL const int *refs;           /* BVH leaf entries: CW_REF(kind, index) */
@@ -246,7 +247,8 @@ CW_INLINE cw_float4 isect_polygon_vertex(vec3 p, int axis)
  * projected along the dominant normal axis, which is right for non-convex polygons.
  * verts: projected vertices (isect_polygon_vertex). */
 CW_INLINE int isect_polygon(CW_GLOBAL const cw_polygon *pg, CW_GLOBAL const cw_float4 *verts,
-                            vec3 o, vec3 d, float tmin, float tmax, float *t_out)
+                            CW_GLOBAL const int *bands, vec3 o, vec3 d, float tmin, float tmax,
+                            float *t_out)
 {
     vec3 n = v3_from4(pg->plane);
     float dn = v3_dot(n, d);
@@ -259,19 +261,39 @@ CW_INLINE int isect_polygon(CW_GLOBAL const cw_polygon *pg, CW_GLOBAL const cw_f
     if (!(t > tmin && t < tmax))
         return 0;
     isect_project(v3_add(o, v3_scale(d, t)), pg->axis, &pa, &pb);
-    ax = verts[first + count - 1].x;
-    ay = verts[first + count - 1].y;
-    for (k = first; k < first + count; k++) {
-        float bx = verts[k].x, by = verts[k].y;
-        /* edge (a, b) crosses the horizontal line through the point, right of it:
-         * pa < ax + (pb - ay)(bx - ax)/(by - ay), without the division */
-        if ((ay > pb) != (by > pb)) {
-            float lhs = (pa - ax) * (by - ay), rhs = (pb - ay) * (bx - ax);
-            if (by > ay ? lhs < rhs : lhs > rhs)
-                inside = !inside;
+    if (pg->band_count > 0) {
+        /* only the edges of the point's band can cross its horizontal line */
+        int b = (int)((pb - pg->band_lo) * pg->band_scale), m, e0, e1;
+        if (!(b >= 0 && b < pg->band_count))
+            return 0;
+        e0 = bands[pg->band_first + 2 * b];
+        e1 = e0 + bands[pg->band_first + 2 * b + 1];
+        for (m = e0; m < e1; m++) {
+            int kb = bands[m], ka = kb == first ? first + count - 1 : kb - 1;
+            float bx = verts[kb].x, by = verts[kb].y;
+            ax = verts[ka].x;
+            ay = verts[ka].y;
+            if ((ay > pb) != (by > pb)) {
+                float lhs = (pa - ax) * (by - ay), rhs = (pb - ay) * (bx - ax);
+                if (by > ay ? lhs < rhs : lhs > rhs)
+                    inside = !inside;
+            }
         }
-        ax = bx;
-        ay = by;
+    } else {
+        ax = verts[first + count - 1].x;
+        ay = verts[first + count - 1].y;
+        for (k = first; k < first + count; k++) {
+            float bx = verts[k].x, by = verts[k].y;
+            /* edge (a, b) crosses the horizontal line through the point, right of it:
+             * pa < ax + (pb - ay)(bx - ax)/(by - ay), without the division */
+            if ((ay > pb) != (by > pb)) {
+                float lhs = (pa - ax) * (by - ay), rhs = (pb - ay) * (bx - ax);
+                if (by > ay ? lhs < rhs : lhs > rhs)
+                    inside = !inside;
+            }
+            ax = bx;
+            ay = by;
+        }
     }
     if (!inside)
         return 0;

@@ -51,6 +51,14 @@ typedef struct {
     int count;       /* number of vertices */
     int material;
     int axis; /* dominant axis of the normal, dropped for the 2-D inside test */
+    /* Edge bands, for polygons with many vertices (band_count 0: test every edge): the
+     * projected second coordinate's range from band_lo is cut into band_count bands of
+     * width 1 / band_scale; band b's (first, count) pair is at bands[band_first + 2b] and
+     * lists the edges (by end vertex) whose range meets it. */
+    float band_lo;
+    float band_scale;
+    int band_first;
+    int band_count;
 } cw_polygon;
 
 /* One node of the flattened bounding volume hierarchy (depth-first order: an interior

@@ -500,7 +500,7 @@ static int host_isect(const host_world *hw, int kind, int idx, const cw_ray *ray
         return isect_triangle(&hw->tri[idx], &ri, 0.0f, CW_FAR, t, &u, &v);
     }
     if (kind == CW_PRIM_POLYGON)
-        return isect_polygon(&hw->pg[idx], hw->verts, o, d, 0.0f, CW_FAR, t);
+        return isect_polygon(&hw->pg[idx], hw->verts, NULL, o, d, 0.0f, CW_FAR, t);
     return isect_cone(&hw->cones[idx], o, d, 0.0f, CW_FAR, t);
 }
 

@@ -419,7 +419,7 @@ static int host_hit(const host_prims *h, int kind, int i, const cw_rayinfo *ri, 
     case CW_PRIM_TRIANGLE:
         return isect_triangle(&h->tri[i], ri, 0.0f, tmax, t, &u, &v);
     case CW_PRIM_POLYGON:
-        return isect_polygon(&h->pg[i], h->verts, ri->o, ri->d, 0.0f, tmax, t);
+        return isect_polygon(&h->pg[i], h->verts, NULL, ri->o, ri->d, 0.0f, tmax, t);
     default:
         return isect_cone(&h->cone[i], ri->o, ri->d, 0.0f, tmax, t);
     }
@@ -504,7 +504,7 @@ enum { POLY_CONVEX, POLY_STAR, POLY_L, POLY_POINT, POLY_LINE };
 
 static void random_polygon(scene *s, const double c[3], double size, int mat, int type)
 {
-    vec3f v[16];
+    vec3f v[160];
     double n[3], e1[3], e2[3], ang[16];
     int k, i;
     rnd_unit(n);
@@ -527,7 +527,9 @@ static void random_polygon(scene *s, const double c[3], double size, int mat, in
         for (i = 0; i < k; i++)
             v[i] = vd(c, e1, e2, ra * cos(ang[i]), rb * sin(ang[i]));
     } else if (type == POLY_STAR) {
-        k = 2 * (3 + rnd_int(4));
+        /* half of them gear-like, 32 to 142 vertices: the kernels test those through
+         * edge bands, the brute force edge by edge */
+        k = rnd_int(2) ? 2 * (16 + rnd_int(56)) : 2 * (3 + rnd_int(4));
         for (i = 0; i < k; i++) {
             double r = (i % 2 ? 0.35 : 1.0) * size;
             double a = 2 * PI * (i + rnd_range(-0.2, 0.2)) / k;
