@@ -1502,6 +1502,7 @@ int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocke
     for (i = 0; i < (size_t)n; i++) {
         marked[i] = rays[i];
         marked[i].pixel = (int)i;
+        marked[i].block = 1; /* each ray its own shading point */
         marked[i].color.x = 1.0f;
         marked[i].color.y = marked[i].color.z = 0.0f;
     }

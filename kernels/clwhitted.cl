@@ -90,22 +90,29 @@ __kernel void cw_shade(CW_WORLD_ARGS, __global const cw_light *lights,
     shade_ray(&w, f, lights, materials, &ray, hits[gid], image, out, shadows, counters);
 }
 
+/* One work-item per shading point: the first of its consecutive shadow rays (block > 0)
+ * tests them all and adds the sum of the unblocked lights to the pixel, in light order,
+ * so the image does not depend on which work-item runs first. Without refraction a level
+ * holds one shading point per pixel and the add needs no atomic. */
 __kernel void cw_occlude(CW_WORLD_ARGS, __global const cw_shadow_ray *shadows,
                          __global float *image, __global int *counters, int n)
 {
-    int gid = (int)get_global_id(0);
+    int gid = (int)get_global_id(0), i, block;
     cw_world w;
-    cw_shadow_ray sr;
-    if (gid >= n)
+    float3 sum = (float3)(0.0f, 0.0f, 0.0f);
+    if (gid >= n || (block = shadows[gid].block) == 0)
         return;
-    sr = shadows[gid];
     CW_MAKE_WORLD(w);
-    if (bvh_any(&w, sr.origin.xyz, sr.dir.xyz, 0.0f, sr.origin.w, sr.skip)) {
+    for (i = gid; i < gid + block && i < n; i++) {
+        cw_shadow_ray sr = shadows[i];
+        if (bvh_any(&w, sr.origin.xyz, sr.dir.xyz, 0.0f, sr.origin.w, sr.skip)) {
 #if CW_STATS
-        atomic_inc(&counters[CW_COUNT_BLOCKED]);
+            atomic_inc(&counters[CW_COUNT_BLOCKED]);
 #endif
-        return;
+            continue;
+        }
+        sum += sr.color.xyz;
     }
-    shade_add(image, sr.pixel, sr.color.xyz);
+    shade_add_local(image, shadows[gid].pixel, sum);
     (void)counters;
 }

@@ -215,7 +215,7 @@ CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
     vec3 d = v3_from4(ray->dir);
     vec3 n, ka, kd, ks, km, kt;
     float phong;
-    int k, count, slot;
+    int k, count, slot, first;
     cw_surface s;
     CW_GLOBAL const cw_material *m;
 
@@ -241,6 +241,7 @@ CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
         if (v3_dot(n, v3_sub(v3_from4(lights[k].position), s.p)) > 0.0f)
             count++;
     slot = count > 0 ? cw_atomic_add_int(&counters[CW_COUNT_SHADOWS], count) : 0;
+    first = 1;
     for (k = 0; k < f->num_lights && count > 0; k++) {
         vec3 lp = v3_from4(lights[k].position);
         vec3 to_light = v3_sub(lp, s.p);
@@ -263,7 +264,9 @@ CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
         sr.color = v4_from3(c, 0.0f);
         sr.pixel = ray->pixel;
         sr.skip = s.flat;
-        sr.pad0 = sr.pad1 = 0;
+        sr.block = first ? count : 0;
+        sr.pad0 = 0;
+        first = 0;
         shadows[slot++] = sr;
     }
 

@@ -133,8 +133,10 @@ typedef struct {
     cw_float4 dir;    /* xyz, unit length */
     cw_float4 color;  /* rgb: the light's contribution if unblocked */
     int pixel;
-    int skip; /* as in cw_ray */
-    int pad0, pad1;
+    int skip;  /* as in cw_ray */
+    int block; /* the first of a shading point's shadow rays: how many there are (they are
+                * consecutive); the others: 0 */
+    int pad0;
 } cw_shadow_ray;
 
 /* Queue and statistics counters, one int each. */
