@@ -11,8 +11,7 @@
 
 #include <CL/cl.h>
 
-#include "bvh.h"
-#include "intersect.h"
+#include "devscene.h"
 #include "clerr.h"
 #include "progcache.h"
 
@@ -320,19 +319,6 @@ void renderer_destroy(renderer *r)
 
 /* ---- program ---------------------------------------------------------------------- */
 
-static void find_materials(const scene *s, scene_features *ft)
-{
-    size_t i;
-    ft->mirrors = ft->transmitters = 0;
-    for (i = 0; i < s->materials.count; i++) {
-        const scene_material *m = &SCENE_AT(s->materials, scene_material, i);
-        if (m->km.x > 0 || m->km.y > 0 || m->km.z > 0)
-            ft->mirrors = 1;
-        if (m->kt.x > 0 || m->kt.y > 0 || m->kt.z > 0)
-            ft->transmitters = 1;
-    }
-}
-
 /* The kernel build options for a scene: every feature flag is decided here, from what
  * the scene uses and its depth (reflection and refraction need depth > 1; SPD counting
  * turns transmitters into reflectors too). */
@@ -425,16 +411,6 @@ static int ensure_program(renderer *r, char *err, size_t errlen)
 
 /* ---- scene upload ----------------------------------------------------------------- */
 
-static cw_float4 f4(vec3f v, float w)
-{
-    cw_float4 r;
-    r.x = v.x;
-    r.y = v.y;
-    r.z = v.z;
-    r.w = w;
-    return r;
-}
-
 /* Checks that a buffer fits the device before asking for it, so that a scene too big
  * for the device gets a message naming the buffer rather than a driver error. */
 static int check_alloc(const renderer *r, const char *what, size_t bytes, char *err, size_t errlen)
@@ -485,363 +461,21 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
     return 0;
 }
 
-/* The device arrays of a scene, and the BVH over all its primitives. */
-typedef struct {
-    cw_sphere *sph;
-    cw_triangle *tri;
-    cw_float4 *normals;
-    cw_polygon *pg;
-    cw_float4 *verts;
-    cw_cone *cones;
-    cw_light *lights;
-    cw_material *mats;
-    bvh_box *boxes;
-    int *box_ref; /* box i bounds primitive box_ref[i] (a CW_REF) */
-    int *refs;    /* BVH leaf entries as CW_REFs */
-    int *bands;   /* edge bands of large polygons (cw_polygon) */
-    size_t nbands, bands_cap;
-    int nsph, ntri, nnorm, npg, ncone, nbox;
-    bvh tree;
-    bvh4 tree4;
-} device_scene;
-
-static void device_scene_free(device_scene *ds)
-{
-    free(ds->sph);
-    free(ds->tri);
-    free(ds->normals);
-    free(ds->pg);
-    free(ds->verts);
-    free(ds->bands);
-    free(ds->cones);
-    free(ds->lights);
-    free(ds->mats);
-    free(ds->boxes);
-    free(ds->box_ref);
-    free(ds->refs);
-    bvh_free(&ds->tree);
-    bvh4_free(&ds->tree4);
-}
-
-static void box_empty(bvh_box *b)
-{
-    int k;
-    for (k = 0; k < 3; k++) {
-        b->lo[k] = INFINITY;
-        b->hi[k] = -INFINITY;
-    }
-}
-
-static void box_add(bvh_box *b, float x, float y, float z)
-{
-    b->lo[0] = fminf(b->lo[0], x);
-    b->lo[1] = fminf(b->lo[1], y);
-    b->lo[2] = fminf(b->lo[2], z);
-    b->hi[0] = fmaxf(b->hi[0], x);
-    b->hi[1] = fmaxf(b->hi[1], y);
-    b->hi[2] = fmaxf(b->hi[2], z);
-}
-
-/* Box of a disc of radius rad around c, perpendicular to the unit axis a. */
-static void box_add_disc(bvh_box *b, const float c[3], const float a[3], float rad)
-{
-    float e[3];
-    int k;
-    for (k = 0; k < 3; k++)
-        e[k] = rad * sqrtf(fmaxf(0.0f, 1.0f - a[k] * a[k]));
-    box_add(b, c[0] - e[0], c[1] - e[1], c[2] - e[2]);
-    box_add(b, c[0] + e[0], c[1] + e[1], c[2] + e[2]);
-}
-
-/* Widens a box by a relative margin, so that rounding in the kernels' intersection
- * tests never puts a hit just outside its box. */
-static void box_pad(bvh_box *b)
-{
-    int k;
-    for (k = 0; k < 3; k++) {
-        float m = 1e-6f * fmaxf(fabsf(b->lo[k]), fabsf(b->hi[k]));
-        b->lo[k] -= m;
-        b->hi[k] += m;
-    }
-}
-
-static int push_box(device_scene *ds, const bvh_box *b, int ref)
-{
-    bvh_box bb = *b;
-    box_pad(&bb);
-    ds->boxes[ds->nbox] = bb;
-    ds->box_ref[ds->nbox] = ref;
-    ds->nbox++;
-    return 0;
-}
-
-static int bands_push(device_scene *ds, int v)
-{
-    if (ds->nbands == ds->bands_cap) {
-        size_t cap = ds->bands_cap ? 2 * ds->bands_cap : 1024;
-        int *nb = realloc(ds->bands, cap * sizeof *nb);
-        if (!nb)
-            return -1;
-        ds->bands = nb;
-        ds->bands_cap = cap;
-    }
-    ds->bands[ds->nbands++] = v;
-    return 0;
-}
-
-/* The band of projected coordinate y, computed exactly as the kernel computes it. */
-static int band_of(const cw_polygon *pg, float y)
-{
-    return (int)((y - pg->band_lo) * pg->band_scale);
-}
-
-/* Edge bands for a polygon of many vertices (its vertices already projected): the range
- * of the second projected coordinate is cut into count/4 bands, and each band lists the
- * edges whose range meets it (one band of margin each side, against rounding), so that the
- * inside test reads a few edges instead of all. A polygon whose edges would be listed too
- * often (long edges across many bands) keeps band_count 0: every edge is tested. */
-static int polygon_bands(device_scene *ds, cw_polygon *pg)
-{
-    const cw_float4 *v = &ds->verts[pg->first];
-    int n = pg->count, nb = n / 4, k, b, total = 0;
-    float lo = v[0].y, hi = v[0].y;
-    size_t table;
-
-    pg->band_count = 0;
-    pg->band_first = 0;
-    pg->band_lo = 0.0f;
-    pg->band_scale = 0.0f;
-    if (n < 32)
-        return 0;
-    for (k = 1; k < n; k++) {
-        lo = fminf(lo, v[k].y);
-        hi = fmaxf(hi, v[k].y);
-    }
-    if (!(hi > lo))
-        return 0;
-    pg->band_lo = lo;
-    pg->band_scale = (float)nb / (hi - lo);
-    pg->band_count = nb;
-    for (k = 0; k < n; k++) {
-        int ka = k == 0 ? n - 1 : k - 1;
-        int b0 = band_of(pg, fminf(v[ka].y, v[k].y)) - 1,
-            b1 = band_of(pg, fmaxf(v[ka].y, v[k].y)) + 1;
-        total += (b1 < nb ? b1 : nb - 1) - (b0 > 0 ? b0 : 0) + 1;
-    }
-    if (total > 8 * n) {
-        pg->band_count = 0;
-        return 0;
-    }
-    table = ds->nbands;
-    pg->band_first = (int)table;
-    for (b = 0; b < 2 * nb; b++)
-        if (bands_push(ds, 0) != 0)
-            return -1;
-    for (b = 0; b < nb; b++) {
-        ds->bands[table + 2 * (size_t)b] = (int)ds->nbands;
-        for (k = 0; k < n; k++) {
-            int ka = k == 0 ? n - 1 : k - 1;
-            int b0 = band_of(pg, fminf(v[ka].y, v[k].y)) - 1;
-            int b1 = band_of(pg, fmaxf(v[ka].y, v[k].y)) + 1;
-            if (b >= b0 && b <= b1 && bands_push(ds, pg->first + k) != 0)
-                return -1;
-        }
-        ds->bands[table + 2 * (size_t)b + 1] = (int)ds->nbands - ds->bands[table + 2 * (size_t)b];
-    }
-    return 0;
-}
-
-static int convert_scene(const scene *s, device_scene *ds, scene_features *ft, char *err,
-                         size_t errlen)
-{
-    size_t i, nprim = s->spheres.count + s->triangles.count + s->polygons.count + s->cones.count;
-    size_t k;
-
-    memset(ds, 0, sizeof *ds);
-    if (nprim > (size_t)1 << 28) {
-        snprintf(err, errlen, "%zu primitives: more than the 2^28 the renderer can address", nprim);
-        return -1;
-    }
-    ds->sph = calloc(s->spheres.count + 1, sizeof *ds->sph);
-    ds->tri = calloc(s->triangles.count + 1, sizeof *ds->tri);
-    ds->normals = calloc(3 * s->triangles.count + 1, sizeof *ds->normals);
-    ds->pg = calloc(s->polygons.count + 1, sizeof *ds->pg);
-    ds->verts = calloc(s->poly_verts.count + 1, sizeof *ds->verts);
-    ds->cones = calloc(s->cones.count + 1, sizeof *ds->cones);
-    ds->lights = calloc(s->lights.count + 1, sizeof *ds->lights);
-    ds->mats = calloc(s->materials.count + 1, sizeof *ds->mats);
-    ds->boxes = calloc(nprim + 1, sizeof *ds->boxes);
-    ds->box_ref = calloc(nprim + 1, sizeof *ds->box_ref);
-    if (!ds->sph || !ds->tri || !ds->normals || !ds->pg || !ds->verts || !ds->cones ||
-        !ds->lights || !ds->mats || !ds->boxes || !ds->box_ref) {
-        snprintf(err, errlen, "out of memory for a scene of %zu primitives", nprim);
-        return -1;
-    }
-    for (i = 0; i < s->spheres.count; i++) {
-        const scene_sphere *ss = &SCENE_AT(s->spheres, scene_sphere, i);
-        float rad = fabsf(ss->radius);
-        bvh_box b;
-        if (!(rad > 0))
-            continue; /* no surface */
-        ds->sph[ds->nsph].center = f4(ss->center, rad);
-        ds->sph[ds->nsph].material = ss->material;
-        box_empty(&b);
-        box_add(&b, ss->center.x - rad, ss->center.y - rad, ss->center.z - rad);
-        box_add(&b, ss->center.x + rad, ss->center.y + rad, ss->center.z + rad);
-        push_box(ds, &b, CW_REF(CW_PRIM_SPHERE, ds->nsph));
-        ds->nsph++;
-    }
-    for (i = 0; i < s->triangles.count; i++) {
-        const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
-        if (scene_triangle_degenerate(st))
-            continue; /* no area, no normal */
-        cw_triangle *t = &ds->tri[ds->ntri];
-        bvh_box b;
-        box_empty(&b);
-        t->p0 = f4(st->p[0], 0);
-        t->p1 = f4(st->p[1], 0);
-        t->p2 = f4(st->p[2], 0);
-        t->material = st->material;
-        t->normals = -1;
-        if (st->has_normals) {
-            t->normals = ds->nnorm;
-            for (k = 0; k < 3; k++)
-                ds->normals[ds->nnorm++] = f4(st->n[k], 0);
-        }
-        for (k = 0; k < 3; k++)
-            box_add(&b, st->p[k].x, st->p[k].y, st->p[k].z);
-        push_box(ds, &b, CW_REF(CW_PRIM_TRIANGLE, ds->ntri));
-        ds->ntri++;
-    }
-    for (i = 0; i < s->poly_verts.count; i++)
-        ds->verts[i] = f4(SCENE_AT(s->poly_verts, vec3f, i), 0);
-    for (i = 0; i < s->polygons.count; i++) {
-        const scene_polygon *sp = &SCENE_AT(s->polygons, scene_polygon, i);
-        const vec3f *v = &SCENE_AT(s->poly_verts, vec3f, sp->first);
-        cw_polygon *pg = &ds->pg[ds->npg];
-        double nn[3], off;
-        int axis, j;
-        bvh_box b;
-        if (scene_polygon_plane(v, sp->count, nn, &off, &axis) != 0)
-            continue; /* degenerate: no area, cannot be hit */
-        pg->plane.x = (float)nn[0];
-        pg->plane.y = (float)nn[1];
-        pg->plane.z = (float)nn[2];
-        pg->plane.w = (float)off;
-        pg->first = sp->first;
-        pg->count = sp->count;
-        pg->material = sp->material;
-        pg->axis = axis;
-        { /* the kernels read the vertices projected along the dominant axis */
-            int pj;
-            for (pj = 0; pj < sp->count; pj++) {
-                vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
-                ds->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
-            }
-        }
-        if (polygon_bands(ds, pg) != 0) {
-            snprintf(err, errlen, "out of memory for polygon edge bands");
-            return -1;
-        }
-        box_empty(&b);
-        for (j = 0; j < sp->count; j++)
-            box_add(&b, v[j].x, v[j].y, v[j].z);
-        push_box(ds, &b, CW_REF(CW_PRIM_POLYGON, ds->npg));
-        ds->npg++;
-    }
-    for (i = 0; i < s->cones.count; i++) {
-        const scene_cone *sc = &SCENE_AT(s->cones, scene_cone, i);
-        cw_cone *cn = &ds->cones[ds->ncone];
-        double ax = (double)sc->apex.x - sc->base.x, ay = (double)sc->apex.y - sc->base.y,
-               az = (double)sc->apex.z - sc->base.z;
-        double h = sqrt(ax * ax + ay * ay + az * az);
-        float r0 = fabsf(sc->base_radius), r1 = fabsf(sc->apex_radius);
-        float a[3], c0[3], c1[3];
-        bvh_box b;
-        if (!(h > 0) || !(r0 > 0 || r1 > 0))
-            continue; /* no surface */
-        a[0] = (float)(ax / h);
-        a[1] = (float)(ay / h);
-        a[2] = (float)(az / h);
-        cn->base = f4(sc->base, r0);
-        cn->axis.x = a[0];
-        cn->axis.y = a[1];
-        cn->axis.z = a[2];
-        cn->axis.w = (float)h;
-        cn->apex_radius = r1;
-        cn->material = sc->material;
-        c0[0] = sc->base.x;
-        c0[1] = sc->base.y;
-        c0[2] = sc->base.z;
-        c1[0] = sc->apex.x;
-        c1[1] = sc->apex.y;
-        c1[2] = sc->apex.z;
-        box_empty(&b);
-        box_add_disc(&b, c0, a, r0);
-        box_add_disc(&b, c1, a, r1);
-        push_box(ds, &b, CW_REF(CW_PRIM_CONE, ds->ncone));
-        ds->ncone++;
-    }
-    for (i = 0; i < s->lights.count; i++) {
-        const scene_light *sl = &SCENE_AT(s->lights, scene_light, i);
-        ds->lights[i].position = f4(sl->position, 0);
-        ds->lights[i].intensity = f4(sl->intensity, 0);
-    }
-    for (i = 0; i < s->materials.count; i++) {
-        const scene_material *sm = &SCENE_AT(s->materials, scene_material, i);
-        ds->mats[i].ka = f4(sm->ka, sm->p);
-        ds->mats[i].kd = f4(sm->kd, 0);
-        ds->mats[i].ks = f4(sm->ks, 0);
-        ds->mats[i].km = f4(sm->km, 0);
-        ds->mats[i].kt = f4(sm->kt, sm->ior);
-    }
-    ft->spheres = ds->nsph;
-    ft->triangles = ds->ntri;
-    ft->polygons = ds->npg;
-    ft->cones = ds->ncone;
-    find_materials(s, ft);
-    return 0;
-}
-
-/* Builds the BVH over the primitives' boxes, collapses it to the 4-wide tree the kernels
- * traverse, and turns its leaf entries into CW_REFs. */
-static int build_bvh(device_scene *ds, char *err, size_t errlen)
-{
-    int i;
-    if (bvh_build(&ds->tree, ds->boxes, ds->nbox, 4, err, errlen) != 0 ||
-        bvh_collapse4(&ds->tree, &ds->tree4, err, errlen) != 0)
-        return -1;
-    if (ds->tree4.stack_need > CW_BVH_STACK) {
-        snprintf(err, errlen,
-                 "the BVH needs a traversal stack of %d entries, more than the kernels' %d",
-                 ds->tree4.stack_need, CW_BVH_STACK);
-        return -1;
-    }
-    ds->refs = malloc(((size_t)ds->tree.num_refs + 1) * sizeof *ds->refs);
-    if (!ds->refs) {
-        snprintf(err, errlen, "out of memory for the BVH");
-        return -1;
-    }
-    for (i = 0; i < ds->tree.num_refs; i++)
-        ds->refs[i] = ds->box_ref[ds->tree.refs[i]];
-    return 0;
-}
-
 /* The view part of the frame: camera, size, depth, background and ambient. */
 static void fill_view(cw_frame *f, const scene *s)
 {
     const scene_camera *c = &s->camera;
-    f->eye = f4(c->eye, 0);
-    f->u = f4(c->u, 0);
-    f->v = f4(c->v, 0);
-    f->w = f4(c->w, 0);
-    f->dir = f4(c->dir, 0);
+    f->eye = devscene_f4(c->eye, 0);
+    f->u = devscene_f4(c->u, 0);
+    f->v = devscene_f4(c->v, 0);
+    f->w = devscene_f4(c->w, 0);
+    f->dir = devscene_f4(c->dir, 0);
     f->window.x = c->l;
     f->window.y = c->r;
     f->window.z = c->b;
     f->window.w = c->t;
-    f->background = f4(s->background, 0);
-    f->ambient = f4(s->ambient, 0);
+    f->background = devscene_f4(s->background, 0);
+    f->ambient = devscene_f4(s->ambient, 0);
     f->d = c->d;
     f->projection = c->projection == SCENE_ORTHOGRAPHIC ? CW_PROJ_ORTHOGRAPHIC
                     : c->projection == SCENE_OBLIQUE    ? CW_PROJ_OBLIQUE
@@ -853,7 +487,7 @@ static void fill_view(cw_frame *f, const scene *s)
 
 int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
 {
-    device_scene ds;
+    devscene ds;
     cw_frame *f = &r->host_frame;
     int rc = -1;
     double t0;
@@ -861,10 +495,16 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     release_scene(r);
     memset(f, 0, sizeof *f);
     r->stats.build_s = r->stats.compile_s = r->stats.upload_s = 0;
-    if (convert_scene(s, &ds, &r->features, err, errlen) != 0)
+    if (devscene_convert(s, &ds, err, errlen) != 0)
         goto out_free;
+    r->features.spheres = ds.nsph;
+    r->features.triangles = ds.ntri;
+    r->features.polygons = ds.npg;
+    r->features.cones = ds.ncone;
+    r->features.mirrors = ds.mirrors;
+    r->features.transmitters = ds.transmitters;
     t0 = seconds_now();
-    if (build_bvh(&ds, err, errlen) != 0)
+    if (devscene_build_bvh(&ds, err, errlen) != 0)
         goto out_free;
     r->stats.build_s = seconds_now() - t0;
 
@@ -907,7 +547,7 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     r->stats.upload_s = seconds_now() - t0;
     rc = 0;
 out_free:
-    device_scene_free(&ds);
+    devscene_free(&ds);
     return rc;
 }
 

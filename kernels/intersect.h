@@ -314,7 +314,7 @@ CW_INLINE int isect_cone(CW_GLOBAL const cw_cone *cn, vec3 o, vec3 d, float tmin
 {
     vec3 ax = v3_from4(cn->axis);
     float height = cn->axis.w, r0 = cn->base.w;
-    float k = (cn->apex_radius - r0) / height;
+    float k = cn->slope;
     vec3 ob;
 #if !CW_FAST
     /* Solve from the point of the ray nearest the cone's middle: far from the cone the

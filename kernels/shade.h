@@ -88,7 +88,7 @@ CW_INLINE cw_surface shade_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d
     } else {
         CW_GLOBAL const cw_cone *cn = &w->cones[hit.index];
         vec3 ax = v3_from4(cn->axis), b = v3_from4(cn->base);
-        float k = (cn->apex_radius - cn->base.w) / cn->axis.w;
+        float k = cn->slope;
         vec3 pb = v3_sub(p, b);
         float h = cw_fmin(cw_fmax(v3_dot(pb, ax), 0.0f), cn->axis.w);
         vec3 radial = v3_sub(pb, v3_scale(ax, h));

@@ -41,8 +41,9 @@ typedef struct {
     cw_float4 base; /* xyz: centre of the base disc, w: its radius */
     cw_float4 axis; /* xyz: unit vector from base to apex, w: height |apex - base| */
     float apex_radius;
+    float slope; /* (apex_radius - base radius) / height: the radius gained per unit of height */
     int material;
-    int pad0, pad1;
+    int pad0;
 } cw_cone;
 
 typedef struct {

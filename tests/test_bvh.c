@@ -16,26 +16,10 @@
 /* ======================================================================================== */
 /* Helpers                                                                                  */
 
-/* splitmix64: the same numbers on every machine. */
-static uint64_t rng_state;
-
-static void rng_seed(uint64_t seed)
-{
-    rng_state = seed;
-}
-
-static uint64_t rng_next(void)
-{
-    uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
 /* uniform in [0, 1) */
 static float rnd(void)
 {
-    return (float)(rng_next() >> 40) * (1.0f / 16777216.0f);
+    return (float)(tu_rng_next() >> 40) * (1.0f / 16777216.0f);
 }
 
 static float rnd_range(float a, float b)
@@ -71,7 +55,7 @@ static void set_box(bvh_box *b, float x, float y, float z, float hx, float hy, f
 static bvh_box *random_boxes(int n, uint64_t seed, float extent, float size)
 {
     bvh_box *b = alloc_boxes(n);
-    rng_seed(seed);
+    tu_rng_seed(seed);
     for (int i = 0; i < n; i++) {
         float x = rnd() * extent, y = rnd() * extent, z = rnd() * extent;
         set_box(&b[i], x, y, z, rnd() * size, rnd() * size, rnd() * size);
@@ -444,7 +428,7 @@ static void sphere_scene(int n, uint64_t seed, float rmin, float rmax, int max_l
     prims p;
     char what[64];
     assert_non_null(s);
-    rng_seed(seed);
+    tu_rng_seed(seed);
     for (int i = 0; i < n; i++) {
         for (int a = 0; a < 3; a++)
             s[i].c[a] = rnd_range(0.0f, 10.0f);
@@ -560,7 +544,7 @@ static void test_random_invariants(void **state)
         int n = 5000;
         bvh_box *b = random_boxes(n, 77, 10.0f, 20.0f);
         assert_int_equal(build_check(b, n, 4, 1, "random, overlapping"), 0);
-        rng_seed(78);
+        tu_rng_seed(78);
         for (int i = 0; i < n; i++) {
             float h = powf(10.0f, rnd_range(-4.0f, 2.0f));
             set_box(&b[i], rnd() * 100, rnd() * 100, rnd() * 100, h, h * rnd(), h);
@@ -587,7 +571,7 @@ static void test_degenerate_invariants(void **state)
     assert_true(big > 0);
 
     /* identical centroids, different sizes */
-    rng_seed(5);
+    tu_rng_seed(5);
     for (int i = 0; i < n; i++)
         set_box(&b[i], 1, 2, 3, rnd(), rnd(), rnd());
     build_check(b, n, 4, 1, "same centroid, random sizes");
@@ -597,7 +581,7 @@ static void test_degenerate_invariants(void **state)
         set_box(&b[i], (float)i * 0.1f, 0, 0, 0, 0, 0);
     assert_int_equal(build_check(b, n, 4, 1, "points on a line"), 0);
     /* boxes centred on a line, random sizes */
-    rng_seed(6);
+    tu_rng_seed(6);
     for (int i = 0; i < n; i++)
         set_box(&b[i], 5.0f, rnd() * 100.0f, 5.0f, rnd(), rnd(), rnd());
     assert_int_equal(build_check(b, n, 4, 1, "centroids on a line"), 0);
@@ -606,7 +590,7 @@ static void test_degenerate_invariants(void **state)
         set_box(&b[i], 0, 0, (float)(i % 3), 0.1f, 0.1f, 0.1f);
     build_check(b, n, 4, 1, "three positions");
     /* one cluster of duplicates and scattered boxes */
-    rng_seed(7);
+    tu_rng_seed(7);
     for (int i = 0; i < n; i++) {
         if (i % 2)
             set_box(&b[i], 3, 3, 3, 0.1f, 0.1f, 0.1f);
@@ -616,17 +600,17 @@ static void test_degenerate_invariants(void **state)
     build_check(b, n, 4, 1, "half duplicates");
 
     /* huge offset, tiny boxes: 1e6 + [0, 1) */
-    rng_seed(8);
+    tu_rng_seed(8);
     for (int i = 0; i < n; i++)
         set_box(&b[i], 1e6f + rnd(), 1e6f + rnd(), -1e6f + rnd(), 1e-3f, 1e-3f, 1e-3f);
     assert_int_equal(build_check(b, n, 4, 1, "1e6 offset"), 0);
     /* tiny coordinates */
-    rng_seed(9);
+    tu_rng_seed(9);
     for (int i = 0; i < n; i++)
         set_box(&b[i], 1e-30f * rnd(), 1e-30f * rnd(), 1e-30f * rnd(), 1e-33f, 1e-33f, 1e-33f);
     assert_int_equal(build_check(b, n, 4, 1, "1e-30 coordinates"), 0);
     /* huge coordinates: areas overflow a float */
-    rng_seed(10);
+    tu_rng_seed(10);
     for (int i = 0; i < n; i++)
         set_box(&b[i], 1e30f * rnd(), 1e30f * rnd(), 1e30f * rnd(), 1e27f, 1e27f, 1e27f);
     assert_int_equal(build_check(b, n, 4, 1, "1e30 coordinates"), 0);
@@ -701,14 +685,14 @@ static void test_traversal_boxes(void **state)
     p.spheres = NULL;
     p.boxes = b;
     compare_traversal(&p, b, n, 4, 3000, -2.0f, 12.0f, "random boxes");
-    rng_seed(32);
+    tu_rng_seed(32);
     for (int i = 0; i < n; i++) /* a few identical stacks: ties broken by index */
         set_box(&b[i], (float)(i % 5) * 2.0f, 5, 5, 0.5f + 0.001f * (float)(i % 3), 0.5f, 0.5f);
     compare_traversal(&p, b, n, 4, 3000, -2.0f, 12.0f, "stacks of identical boxes");
     for (int i = 0; i < n; i++)
         set_box(&b[i], 5, (float)i * 0.01f, 5, 1, 0.004f, 1);
     compare_traversal(&p, b, n, 4, 3000, -2.0f, 32.0f, "slabs along a line");
-    rng_seed(33);
+    tu_rng_seed(33);
     for (int i = 0; i < n; i++)
         set_box(&b[i], 1e4f + rnd() * 10, 1e4f + rnd() * 10, 1e4f + rnd() * 10, 0.1f, 0.1f, 0.1f);
     compare_traversal(&p, b, n, 4, 3000, 1e4f - 2.0f, 1e4f + 12.0f, "random boxes at 1e4");
@@ -795,7 +779,7 @@ static void test_sah_quality(void **state)
     /* uniform: the SAH wins by its leaf-or-split choice (measured 0.76) */
     assert_true(sah_versus_median(b, n, "uniform small boxes") < 0.95);
     /* clustered, mixed sizes: the SAH wins by far (measured 0.25) */
-    rng_seed(42);
+    tu_rng_seed(42);
     for (int i = 0; i < n; i++) {
         int cl = (int)(rnd() * 20.0f);
         float cx = (float)(cl % 5) * 20.0f, cy = (float)(cl / 5) * 20.0f, cz = (float)(cl % 3);
@@ -814,7 +798,7 @@ static void test_million_triangles(void **state)
     bvh t;
     double t0, t1;
     (void)state;
-    rng_seed(51);
+    tu_rng_seed(51);
     for (int i = 0; i < n; i++) {
         float v[3][3];
         for (int a = 0; a < 3; a++) {

@@ -64,38 +64,6 @@ static int add_material(scene *s, vec3f ka, vec3f kd, vec3f ks, vec3f km, float 
     return (int)scene_push(&s->materials, &m, sizeof m);
 }
 
-static void add_sphere(scene *s, float x, float y, float z, float r, int mat)
-{
-    scene_sphere sp;
-    sp.center = vec3f_make(x, y, z);
-    sp.radius = r;
-    sp.material = mat;
-    assert_true(scene_push(&s->spheres, &sp, sizeof sp) >= 0);
-}
-
-static void add_triangle(scene *s, vec3f a, vec3f b, vec3f c, int mat)
-{
-    scene_triangle t;
-    memset(&t, 0, sizeof t);
-    t.p[0] = a;
-    t.p[1] = b;
-    t.p[2] = c;
-    t.material = mat;
-    assert_true(scene_push(&s->triangles, &t, sizeof t) >= 0);
-}
-
-static void add_polygon(scene *s, const vec3f *v, int n, int mat)
-{
-    scene_polygon p;
-    int i;
-    p.first = (int)s->poly_verts.count;
-    p.count = n;
-    p.material = mat;
-    for (i = 0; i < n; i++)
-        assert_true(scene_push(&s->poly_verts, &v[i], sizeof v[i]) >= 0);
-    assert_true(scene_push(&s->polygons, &p, sizeof p) >= 0);
-}
-
 static void add_light(scene *s, vec3f pos, vec3f intensity)
 {
     scene_light l;
@@ -266,7 +234,7 @@ static void test_sphere_cases(void **state)
     vec3f one = vec3f_make(1, 1, 1);
     (void)state;
     base_scene(&s, SCENE_PERSPECTIVE, 1, 1);
-    add_sphere(&s, 0, 0, -5, 1, add_material(&s, one, one, one, one, 1));
+    tu_add_sphere(&s, 0, 0, -5, 1, add_material(&s, one, one, one, one, 1));
     rays[0] = make_ray(0, 0, 0, 0, 0, -1);     /* disc > 0: two roots, nearer is 4 */
     rays[1] = make_ray(1, 0, 0, 0, 0, -1);     /* disc = 0: tangent at t = 5 */
     rays[2] = make_ray(1.001, 0, 0, 0, 0, -1); /* disc < 0: miss */
@@ -295,8 +263,8 @@ static void test_triangle_cases(void **state)
     vec3f one = vec3f_make(1, 1, 1);
     (void)state;
     base_scene(&s, SCENE_PERSPECTIVE, 1, 1);
-    add_triangle(&s, vec3f_make(0, 0, -2), vec3f_make(1, 0, -2), vec3f_make(0, 1, -2),
-                 add_material(&s, one, one, one, one, 1));
+    tu_add_triangle(&s, vec3f_make(0, 0, -2), vec3f_make(1, 0, -2), vec3f_make(0, 1, -2),
+                    add_material(&s, one, one, one, one, 1));
     rays[0] = make_ray(0.25, 0.125, 0, 0, 0, -1); /* inside: t=2, beta=.25, gamma=.125 */
     rays[1] = make_ray(0.75, 0.75, 0, 0, 0, -1);  /* outside: beta + gamma > 1 */
     rays[2] = make_ray(-1, 0.25, -2, 1, 0, 0);    /* parallel, in the triangle's plane */
@@ -334,7 +302,7 @@ static void test_polygon_nonconvex(void **state)
     for (i = 0; i < 8; i++)
         v[i] = vec3f_make(u_shape[i][0], u_shape[i][1], -3);
     base_scene(&s, SCENE_PERSPECTIVE, 1, 1);
-    add_polygon(&s, v, 8, add_material(&s, one, one, one, one, 1));
+    tu_add_polygon(&s, v, 8, add_material(&s, one, one, one, one, 1));
     rays[0] = make_ray(0.5, 2.5, 0, 0, 0, -1); /* left arm */
     rays[1] = make_ray(2.5, 2.5, 0, 0, 0, -1); /* right arm */
     rays[2] = make_ray(1.5, 2.0, 0, 0, 0, -1); /* the notch: outside though inside the hull */
@@ -362,12 +330,12 @@ static void test_closest_hit(void **state)
     (void)state;
     base_scene(&s, SCENE_PERSPECTIVE, 1, 1);
     m = add_material(&s, one, one, one, one, 1);
-    add_sphere(&s, 0, 0, -10, 1, m); /* farthest */
-    add_sphere(&s, 0, 0, -6, 1, m);  /* nearest sphere */
-    add_triangle(&s, vec3f_make(-1, -1, -8), vec3f_make(1, -1, -8), vec3f_make(0, 1, -8), m);
+    tu_add_sphere(&s, 0, 0, -10, 1, m); /* farthest */
+    tu_add_sphere(&s, 0, 0, -6, 1, m);  /* nearest sphere */
+    tu_add_triangle(&s, vec3f_make(-1, -1, -8), vec3f_make(1, -1, -8), vec3f_make(0, 1, -8), m);
     for (i = 0; i < 4; i++)
         v[i] = vec3f_make(sq[i][0] + 5, sq[i][1], -3);
-    add_polygon(&s, v, 4, m);
+    tu_add_polygon(&s, v, 4, m);
     rays[0] = make_ray(0, 0, 0, 0, 0, -1);    /* sphere 1 at t=5 before triangle and sphere 0 */
     rays[1] = make_ray(0, 0, -7.5, 0, 0, -1); /* past sphere 1: triangle at 0.5 */
     rays[2] = make_ray(5, 0, 0, 0, 0, -1);    /* only the polygon */
@@ -393,7 +361,7 @@ static void floor_scene(scene *s, int mat_from_caller)
     int i;
     for (i = 0; i < 4; i++)
         v[i] = vec3f_make(sq[i][0], sq[i][1], 0);
-    add_polygon(s, v, 4, mat_from_caller);
+    tu_add_polygon(s, v, 4, mat_from_caller);
 }
 
 static void render_pixel(scene *s, int x, int y, double out[3])
@@ -502,7 +470,7 @@ static void test_shade_shadow(void **state)
     add_light(&s, vec3f_make(3, 1, 4), vec3f_make(0.9f, 0.8f, 0.7f));
     add_light(&s, vec3f_make(-2, -2, 1), vec3f_make(0.2f, 0.5f, 1.0f));
     /* a small sphere on the segment to light 0, away from the eye ray */
-    add_sphere(&s, 1.5f, 0.5f, 2.0f, 0.2f, 0);
+    tu_add_sphere(&s, 1.5f, 0.5f, 2.0f, 0.2f, 0);
     render_pixel(&s, 0, 0, got);
     blinn_phong(P0, NZ, VZ, &s, blocked, want);
     check_pixel(got, want, "light 0 in shadow");
@@ -548,18 +516,18 @@ static void mirror_scene(scene *s, int with_c)
     a[1] = vec3f_make(1, -1, -1);
     a[2] = vec3f_make(1, 1, -1);
     a[3] = vec3f_make(-1, 1, 1);
-    add_polygon(s, a, 4, ma);
+    tu_add_polygon(s, a, 4, ma);
     b[0] = vec3f_make(4, -1, -1);
     b[1] = vec3f_make(6, -1, 1);
     b[2] = vec3f_make(6, 1, 1);
     b[3] = vec3f_make(4, 1, -1);
-    add_polygon(s, b, 4, mb);
+    tu_add_polygon(s, b, 4, mb);
     if (with_c) {
         c[0] = vec3f_make(4, -1, 5);
         c[1] = vec3f_make(6, -1, 5);
         c[2] = vec3f_make(6, 1, 5);
         c[3] = vec3f_make(4, 1, 5);
-        add_polygon(s, c, 4, mc);
+        tu_add_polygon(s, c, 4, mc);
     }
 }
 
@@ -603,7 +571,7 @@ static void test_shade_miss_is_background(void **state)
     s.background = vec3f_make(0.05f, 0.1f, 0.2f);
     add_material(&s, vec3f_make(1, 1, 1), vec3f_make(1, 1, 1), vec3f_make(0, 0, 0),
                  vec3f_make(0, 0, 0), 1);
-    add_sphere(&s, 0, 0, -5, 1, 0);
+    tu_add_sphere(&s, 0, 0, -5, 1, 0);
     s.camera.eye = vec3f_make(0, 10, 10); /* looking along -z past the sphere */
     render_pixel(&s, 0, 0, got);
     check_pixel(got, want, "miss");

@@ -46,6 +46,8 @@
  * host headers: shade.h names a parameter like the host type `image`. */
 #include "shade.h"
 
+#include "devscene.h"
+
 #include "image.h"
 #include "render.h"
 #include "scene.h"
@@ -308,34 +310,17 @@ static void base_scene(scene *s)
 
 static void add_sphere(scene *s, dvec c, double r)
 {
-    scene_sphere sp;
-    sp.center = fv(c);
-    sp.radius = (float)r;
-    sp.material = 0;
-    assert_true(scene_push(&s->spheres, &sp, sizeof sp) >= 0);
+    tu_add_sphere(s, c.x, c.y, c.z, r, 0);
 }
 
 static void add_triangle(scene *s, vec3f a, vec3f b, vec3f c)
 {
-    scene_triangle t;
-    memset(&t, 0, sizeof t);
-    t.p[0] = a;
-    t.p[1] = b;
-    t.p[2] = c;
-    t.material = 0;
-    assert_true(scene_push(&s->triangles, &t, sizeof t) >= 0);
+    tu_add_triangle(s, a, b, c, 0);
 }
 
 static void add_polygon(scene *s, const vec3f *v, int n)
 {
-    scene_polygon p;
-    int i;
-    p.first = (int)s->poly_verts.count;
-    p.count = n;
-    p.material = 0;
-    for (i = 0; i < n; i++)
-        assert_true(scene_push(&s->poly_verts, &v[i], sizeof v[i]) >= 0);
-    assert_true(scene_push(&s->polygons, &p, sizeof p) >= 0);
+    tu_add_polygon(s, v, n, 0);
 }
 
 static void add_cone(scene *s, vec3f base, float r0, vec3f apex, float r1)
@@ -360,131 +345,31 @@ static void upload(scene *s)
 
 /* ---- the device arrays, rebuilt on the host --------------------------------------------- */
 
+/* The device arrays as the renderer builds them (host/devscene.c, the same indices:
+ * test_selfhit checks it against the device's t), and the kernels' view of them. */
 typedef struct {
-    cw_sphere *sph;
-    cw_triangle *tri;
-    cw_float4 *normals;
-    cw_polygon *pg;
-    cw_float4 *verts;
-    cw_cone *cones;
-    int nsph, ntri, nnorm, npg, ncone;
+    devscene d;
     cw_world w;
 } host_world;
 
-static cw_float4 f4(vec3f v, float w)
-{
-    cw_float4 r;
-    r.x = v.x;
-    r.y = v.y;
-    r.z = v.z;
-    r.w = w;
-    return r;
-}
-
-/* The primitive arrays as host/render.c (convert_scene) uploads them: spheres of radius 0,
- * degenerate polygons and empty cones dropped, triangles all kept, order kept, so that a
- * hit's index means the same here (test_selfhit checks it against the device's t). */
 static void host_world_init(host_world *hw, const scene *s)
 {
-    size_t i;
-    int k;
-    memset(hw, 0, sizeof *hw);
-    hw->sph = calloc(s->spheres.count + 1, sizeof *hw->sph);
-    hw->tri = calloc(s->triangles.count + 1, sizeof *hw->tri);
-    hw->normals = calloc(3 * s->triangles.count + 1, sizeof *hw->normals);
-    hw->pg = calloc(s->polygons.count + 1, sizeof *hw->pg);
-    hw->verts = calloc(s->poly_verts.count + 1, sizeof *hw->verts);
-    hw->cones = calloc(s->cones.count + 1, sizeof *hw->cones);
-    assert_true(hw->sph && hw->tri && hw->normals && hw->pg && hw->verts && hw->cones);
-    for (i = 0; i < s->spheres.count; i++) {
-        const scene_sphere *ss = &SCENE_AT(s->spheres, scene_sphere, i);
-        float rad = fabsf(ss->radius);
-        if (!(rad > 0))
-            continue;
-        hw->sph[hw->nsph].center = f4(ss->center, rad);
-        hw->sph[hw->nsph].material = ss->material;
-        hw->nsph++;
-    }
-    for (i = 0; i < s->triangles.count; i++) {
-        const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
-        if (scene_triangle_degenerate(st))
-            continue; /* no area, no normal */
-        cw_triangle *t = &hw->tri[hw->ntri++];
-        t->p0 = f4(st->p[0], 0);
-        t->p1 = f4(st->p[1], 0);
-        t->p2 = f4(st->p[2], 0);
-        t->material = st->material;
-        t->normals = -1;
-        if (st->has_normals) {
-            t->normals = hw->nnorm;
-            for (k = 0; k < 3; k++)
-                hw->normals[hw->nnorm++] = f4(st->n[k], 0);
-        }
-    }
-    for (i = 0; i < s->poly_verts.count; i++)
-        hw->verts[i] = f4(SCENE_AT(s->poly_verts, vec3f, i), 0);
-    for (i = 0; i < s->polygons.count; i++) {
-        const scene_polygon *sp = &SCENE_AT(s->polygons, scene_polygon, i);
-        cw_polygon *pg = &hw->pg[hw->npg];
-        double nn[3], off;
-        int axis;
-        if (scene_polygon_plane(&SCENE_AT(s->poly_verts, vec3f, sp->first), sp->count, nn, &off,
-                                &axis) != 0)
-            continue;
-        pg->plane.x = (float)nn[0];
-        pg->plane.y = (float)nn[1];
-        pg->plane.z = (float)nn[2];
-        pg->plane.w = (float)off;
-        pg->first = sp->first;
-        pg->count = sp->count;
-        pg->material = sp->material;
-        pg->axis = axis;
-        { /* the kernels read the vertices projected along the dominant axis */
-            int pj;
-            for (pj = 0; pj < sp->count; pj++) {
-                vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
-                hw->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
-            }
-        }
-        hw->npg++;
-    }
-    for (i = 0; i < s->cones.count; i++) {
-        const scene_cone *sc = &SCENE_AT(s->cones, scene_cone, i);
-        cw_cone *cn = &hw->cones[hw->ncone];
-        double ax = (double)sc->apex.x - sc->base.x, ay = (double)sc->apex.y - sc->base.y,
-               az = (double)sc->apex.z - sc->base.z;
-        double h = sqrt(ax * ax + ay * ay + az * az);
-        float r0 = fabsf(sc->base_radius), r1 = fabsf(sc->apex_radius);
-        if (!(h > 0) || !(r0 > 0 || r1 > 0))
-            continue;
-        cn->base = f4(sc->base, r0);
-        cn->axis.x = (float)(ax / h);
-        cn->axis.y = (float)(ay / h);
-        cn->axis.z = (float)(az / h);
-        cn->axis.w = (float)h;
-        cn->apex_radius = r1;
-        cn->material = sc->material;
-        hw->ncone++;
-    }
-    hw->w.spheres = hw->sph;
-    hw->w.triangles = hw->tri;
-    hw->w.normals = hw->normals;
-    hw->w.polygons = hw->pg;
-    hw->w.poly_verts = hw->verts;
-    hw->w.cones = hw->cones;
-    hw->w.nodes = NULL;
-    hw->w.refs = NULL;
-    hw->w.num_nodes = 0;
+    char msg[256];
+    memset(&hw->w, 0, sizeof hw->w);
+    if (devscene_convert(s, &hw->d, msg, sizeof msg) != 0)
+        fail_msg("%s", msg);
+    hw->w.spheres = hw->d.sph;
+    hw->w.triangles = hw->d.tri;
+    hw->w.normals = hw->d.normals;
+    hw->w.polygons = hw->d.pg;
+    hw->w.poly_verts = hw->d.verts;
+    hw->w.poly_bands = hw->d.bands;
+    hw->w.cones = hw->d.cones;
 }
 
 static void host_world_free(host_world *hw)
 {
-    free(hw->sph);
-    free(hw->tri);
-    free(hw->normals);
-    free(hw->pg);
-    free(hw->verts);
-    free(hw->cones);
+    devscene_free(&hw->d);
 }
 
 /* The kernels' test of one primitive, run on the host. Returns 1 on a hit, with *t. */
@@ -494,14 +379,14 @@ static int host_isect(const host_world *hw, int kind, int idx, const cw_ray *ray
     float u, v;
     cw_rayinfo ri;
     if (kind == CW_PRIM_SPHERE)
-        return isect_sphere(&hw->sph[idx], o, d, 0.0f, CW_FAR, t);
+        return isect_sphere(&hw->d.sph[idx], o, d, 0.0f, CW_FAR, t);
     if (kind == CW_PRIM_TRIANGLE) {
         ri = isect_rayinfo(o, d);
-        return isect_triangle(&hw->tri[idx], &ri, 0.0f, CW_FAR, t, &u, &v);
+        return isect_triangle(&hw->d.tri[idx], &ri, 0.0f, CW_FAR, t, &u, &v);
     }
     if (kind == CW_PRIM_POLYGON)
-        return isect_polygon(&hw->pg[idx], hw->verts, NULL, o, d, 0.0f, CW_FAR, t);
-    return isect_cone(&hw->cones[idx], o, d, 0.0f, CW_FAR, t);
+        return isect_polygon(&hw->d.pg[idx], hw->d.verts, hw->d.bands, o, d, 0.0f, CW_FAR, t);
+    return isect_cone(&hw->d.cones[idx], o, d, 0.0f, CW_FAR, t);
 }
 
 /* ---- spheres against double precision --------------------------------------------------- */
@@ -663,8 +548,8 @@ static void sphere_scene(dvec c, double r, cw_sphere *sp)
     add_sphere(&s, c, r);
     upload(&s);
     host_world_init(&hw, &s);
-    assert_int_equal(hw.nsph, 1);
-    *sp = hw.sph[0];
+    assert_int_equal(hw.d.nsph, 1);
+    *sp = hw.d.sph[0];
     host_world_free(&hw);
     scene_free(&s);
 }
@@ -957,7 +842,7 @@ static void watertight_case(const char *what, dvec centre, double radius, long n
     for (done = 0; done < nrays; done += BATCH) {
         long n = nrays - done < BATCH ? nrays - done : BATCH, j;
         for (j = 0; j < n; j++) {
-            dvec o = dv4(f4(fv(dadd(centre, dscale(rnd_ball(), 0.5 * radius))), 0)), q;
+            dvec o = dv4(devscene_f4(fv(dadd(centre, dscale(rnd_ball(), 0.5 * radius))), 0)), q;
             if (rnd() < 0.8) {
                 int e = rnd_int(ne);
                 dvec a = dv(fvert[edges[e][0]].x, fvert[edges[e][0]].y, fvert[edges[e][0]].z);
@@ -1262,7 +1147,7 @@ static void sh_run(const host_world *hw, const cw_ray *eye, const cw_hit *eh, si
                 sec[ns] = ray_v3(so, td, skip);
                 sec_surf[ns] = g;
                 sec_type[ns] = 2;
-                sec_limit[ns] = g == 0 ? 0.5f * hw->sph[eh[i].index].center.w : FLT_MAX;
+                sec_limit[ns] = g == 0 ? 0.5f * hw->d.sph[eh[i].index].center.w : FLT_MAX;
                 ns++;
             }
         }
@@ -1584,7 +1469,7 @@ static void test_degenerate_zero_area(void **state)
     host_world_init(&hw, &s);
     for (i = 0; i < n; i++) {
         int ti = rnd_int(nt);
-        const cw_triangle *t = &hw.tri[ti];
+        const cw_triangle *t = &hw.d.tri[ti];
         dvec p0 = dv4(t->p0), p1 = dv4(t->p1), p2 = dv4(t->p2), q, o;
         double w = rnd();
         aimed[tri_kind[ti]]++;
@@ -1599,7 +1484,7 @@ static void test_degenerate_zero_area(void **state)
         if (isnan(hits[i].t) || isnan(hits[i].u) || isnan(hits[i].v))
             nan++;
         if (hits[i].kind != CW_PRIM_NONE) {
-            const cw_triangle *t = &hw.tri[hits[i].index];
+            const cw_triangle *t = &hw.d.tri[hits[i].index];
             cw_surface sf =
                 shade_surface(&hw.w, hits[i], v3_from4(rays[i].origin), v3_from4(rays[i].dir));
             by_kind[tri_kind[hits[i].index]]++;
@@ -1705,7 +1590,7 @@ static void test_needle_triangles(void **state)
     upload(&s);
     host_world_init(&hw, &s);
     for (i = 0; i < n; i++) {
-        const cw_triangle *t = &hw.tri[rnd_int(nt)];
+        const cw_triangle *t = &hw.d.tri[rnd_int(nt)];
         dvec p0 = dv4(t->p0), p1 = dv4(t->p1), p2 = dv4(t->p2), q;
         double b1 = rnd(), b2 = rnd() * (1 - b1);
         b1 = b1 * 1.2 - 0.1;
@@ -1728,7 +1613,7 @@ static void test_needle_triangles(void **state)
         }
         /* the ray may pass near other needles than the aimed one: any of them counts */
         for (j = 0; j < nt; j++) {
-            if (tri_ref(&rays[i], &hw.tri[j], &tr, &eu)) {
+            if (tri_ref(&rays[i], &hw.d.tri[j], &tr, &eu)) {
                 if (eu >= 0)
                     rin = 1;
                 if (fabs(eu) <= KB)
@@ -1749,7 +1634,7 @@ static void test_needle_triangles(void **state)
         int rin = 0, j;
         fast_hits += hits[i].kind != CW_PRIM_NONE;
         for (j = 0; j < nt; j++)
-            if (tri_ref(&rays[i], &hw.tri[j], &tr, &eu) && eu >= 0)
+            if (tri_ref(&rays[i], &hw.d.tri[j], &tr, &eu) && eu >= 0)
                 rin = 1;
         fast_agree += rin == (hits[i].kind != CW_PRIM_NONE);
     }

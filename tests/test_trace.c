@@ -20,6 +20,7 @@
 
 #include "testutil.h"
 
+#include "devscene.h"
 #include "intersect.h"
 #include "render.h"
 #include "scene.h"
@@ -50,26 +51,10 @@ static int teardown(void **state)
 /* ======================================================================================== */
 /* Helpers                                                                                  */
 
-/* splitmix64: the same numbers on every machine. */
-static uint64_t rng_state;
-
-static void rng_seed(uint64_t seed)
-{
-    rng_state = seed;
-}
-
-static uint64_t rng_next(void)
-{
-    uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
 /* uniform in [0, 1) */
 static double rnd(void)
 {
-    return (double)(rng_next() >> 11) * (1.0 / 9007199254740992.0);
+    return (double)(tu_rng_next() >> 11) * (1.0 / 9007199254740992.0);
 }
 
 static double rnd_range(double a, double b)
@@ -79,7 +64,7 @@ static double rnd_range(double a, double b)
 
 static int rnd_int(int n)
 {
-    return (int)(rng_next() % (uint64_t)n);
+    return (int)(tu_rng_next() % (uint64_t)n);
 }
 
 /* A uniformly distributed unit vector. */
@@ -155,38 +140,6 @@ static int add_flat(scene *s, vec3f ka)
     return add_material(s, ka, grey(0), grey(0), grey(0), grey(0), 1, 1);
 }
 
-static void add_sphere(scene *s, double x, double y, double z, double r, int mat)
-{
-    scene_sphere sp;
-    sp.center = vec3f_make((float)x, (float)y, (float)z);
-    sp.radius = (float)r;
-    sp.material = mat;
-    assert_true(scene_push(&s->spheres, &sp, sizeof sp) >= 0);
-}
-
-static void add_triangle(scene *s, vec3f a, vec3f b, vec3f c, int mat)
-{
-    scene_triangle t;
-    memset(&t, 0, sizeof t);
-    t.p[0] = a;
-    t.p[1] = b;
-    t.p[2] = c;
-    t.material = mat;
-    assert_true(scene_push(&s->triangles, &t, sizeof t) >= 0);
-}
-
-static void add_polygon(scene *s, const vec3f *v, int n, int mat)
-{
-    scene_polygon p;
-    int i;
-    p.first = (int)s->poly_verts.count;
-    p.count = n;
-    p.material = mat;
-    for (i = 0; i < n; i++)
-        assert_true(scene_push(&s->poly_verts, &v[i], sizeof v[i]) >= 0);
-    assert_true(scene_push(&s->polygons, &p, sizeof p) >= 0);
-}
-
 /* A quadrilateral face whose polygon normal points to the `outward` side (the vertex
  * order is reversed when needed): refraction decides inside/outside from it. */
 static void add_face(scene *s, const vec3f q[4], vec3f outward, int mat)
@@ -203,7 +156,7 @@ static void add_face(scene *s, const vec3f q[4], vec3f outward, int mat)
             v[i] = q[3 - i];
     assert_int_equal(scene_polygon_plane(v, 4, n, &off, &axis), 0);
     assert_true(n[0] * outward.x + n[1] * outward.y + n[2] * outward.z > 0);
-    add_polygon(s, v, 4, mat);
+    tu_add_polygon(s, v, 4, mat);
 }
 
 static void add_cone(scene *s, vec3f base, float r0, vec3f apex, float r1, int mat)
@@ -295,122 +248,15 @@ static void expect_options(const char *const *words, int n, const char *what)
 /* ======================================================================================== */
 /* Host copies of the device primitives, and brute force                                   */
 
-/* The device arrays as render.c's convert_scene makes them: degenerate spheres, polygons
- * and cones dropped, the order kept, radii made positive. */
-typedef struct {
-    cw_sphere *sph;
-    cw_triangle *tri;
-    cw_polygon *pg;
-    cw_float4 *verts;
-    cw_cone *cone;
-    int nsph, ntri, npg, ncone, dropped;
-} host_prims;
-
-static cw_float4 f4(vec3f v, float w)
+/* The device arrays as the renderer builds them (host/devscene.c): the same indices. */
+static void host_convert(const scene *s, devscene *h)
 {
-    cw_float4 r;
-    r.x = v.x;
-    r.y = v.y;
-    r.z = v.z;
-    r.w = w;
-    return r;
-}
-
-static void host_convert(const scene *s, host_prims *h)
-{
-    size_t i;
-    memset(h, 0, sizeof *h);
-    h->sph = calloc(s->spheres.count + 1, sizeof *h->sph);
-    h->tri = calloc(s->triangles.count + 1, sizeof *h->tri);
-    h->pg = calloc(s->polygons.count + 1, sizeof *h->pg);
-    h->verts = calloc(s->poly_verts.count + 1, sizeof *h->verts);
-    h->cone = calloc(s->cones.count + 1, sizeof *h->cone);
-    assert_true(h->sph && h->tri && h->pg && h->verts && h->cone);
-    for (i = 0; i < s->spheres.count; i++) {
-        const scene_sphere *ss = &SCENE_AT(s->spheres, scene_sphere, i);
-        float rad = fabsf(ss->radius);
-        if (!(rad > 0)) {
-            h->dropped++;
-            continue;
-        }
-        h->sph[h->nsph].center = f4(ss->center, rad);
-        h->sph[h->nsph].material = ss->material;
-        h->nsph++;
-    }
-    for (i = 0; i < s->triangles.count; i++) {
-        const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
-        if (scene_triangle_degenerate(st))
-            continue; /* no area, no normal */
-        cw_triangle *t = &h->tri[h->ntri++];
-        t->p0 = f4(st->p[0], 0);
-        t->p1 = f4(st->p[1], 0);
-        t->p2 = f4(st->p[2], 0);
-        t->material = st->material;
-        t->normals = -1;
-    }
-    for (i = 0; i < s->poly_verts.count; i++)
-        h->verts[i] = f4(SCENE_AT(s->poly_verts, vec3f, i), 0);
-    for (i = 0; i < s->polygons.count; i++) {
-        const scene_polygon *sp = &SCENE_AT(s->polygons, scene_polygon, i);
-        const vec3f *v = &SCENE_AT(s->poly_verts, vec3f, sp->first);
-        cw_polygon *pg = &h->pg[h->npg];
-        double nn[3], off;
-        int axis;
-        if (scene_polygon_plane(v, sp->count, nn, &off, &axis) != 0) {
-            h->dropped++;
-            continue;
-        }
-        pg->plane.x = (float)nn[0];
-        pg->plane.y = (float)nn[1];
-        pg->plane.z = (float)nn[2];
-        pg->plane.w = (float)off;
-        pg->first = sp->first;
-        pg->count = sp->count;
-        pg->material = sp->material;
-        pg->axis = axis;
-        { /* the kernels read the vertices projected along the dominant axis */
-            int pj;
-            for (pj = 0; pj < sp->count; pj++) {
-                vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
-                h->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
-            }
-        }
-        h->npg++;
-    }
-    for (i = 0; i < s->cones.count; i++) {
-        const scene_cone *sc = &SCENE_AT(s->cones, scene_cone, i);
-        cw_cone *cn = &h->cone[h->ncone];
-        double ax = (double)sc->apex.x - sc->base.x, ay = (double)sc->apex.y - sc->base.y,
-               az = (double)sc->apex.z - sc->base.z;
-        double len = sqrt(ax * ax + ay * ay + az * az);
-        float r0 = fabsf(sc->base_radius), r1 = fabsf(sc->apex_radius);
-        if (!(len > 0) || !(r0 > 0 || r1 > 0)) {
-            h->dropped++;
-            continue;
-        }
-        cn->base = f4(sc->base, r0);
-        cn->axis.x = (float)(ax / len);
-        cn->axis.y = (float)(ay / len);
-        cn->axis.z = (float)(az / len);
-        cn->axis.w = (float)len;
-        cn->apex_radius = r1;
-        cn->material = sc->material;
-        h->ncone++;
-    }
-}
-
-static void host_free(host_prims *h)
-{
-    free(h->sph);
-    free(h->tri);
-    free(h->pg);
-    free(h->verts);
-    free(h->cone);
+    if (devscene_convert(s, h, err, sizeof err) != 0)
+        fail_msg("%s", err);
 }
 
 /* One primitive, with the kernels' own function: 1 and *t on a hit in (tmin, tmax). */
-static int host_hit(const host_prims *h, int kind, int i, const cw_rayinfo *ri, float tmax,
-                    float *t)
+static int host_hit(const devscene *h, int kind, int i, const cw_rayinfo *ri, float tmax, float *t)
 {
     float u, v;
     switch (kind) {
@@ -418,14 +264,18 @@ static int host_hit(const host_prims *h, int kind, int i, const cw_rayinfo *ri, 
         return isect_sphere(&h->sph[i], ri->o, ri->d, 0.0f, tmax, t);
     case CW_PRIM_TRIANGLE:
         return isect_triangle(&h->tri[i], ri, 0.0f, tmax, t, &u, &v);
-    case CW_PRIM_POLYGON:
-        return isect_polygon(&h->pg[i], h->verts, NULL, ri->o, ri->d, 0.0f, tmax, t);
+    case CW_PRIM_POLYGON: {
+        /* every edge, not the kernel's edge bands: the brute force checks those too */
+        cw_polygon pg = h->pg[i];
+        pg.band_count = 0;
+        return isect_polygon(&pg, h->verts, NULL, ri->o, ri->d, 0.0f, tmax, t);
+    }
     default:
-        return isect_cone(&h->cone[i], ri->o, ri->d, 0.0f, tmax, t);
+        return isect_cone(&h->cones[i], ri->o, ri->d, 0.0f, tmax, t);
     }
 }
 
-static int host_count(const host_prims *h, int kind)
+static int host_count(const devscene *h, int kind)
 {
     return kind == CW_PRIM_SPHERE     ? h->nsph
            : kind == CW_PRIM_TRIANGLE ? h->ntri
@@ -434,7 +284,7 @@ static int host_count(const host_prims *h, int kind)
 }
 
 /* Closest hit over every primitive (never skip - 1), in (0, CW_FAR) as the kernel. */
-static cw_hit brute_closest(const host_prims *h, const cw_ray *ray)
+static cw_hit brute_closest(const devscene *h, const cw_ray *ray)
 {
     cw_rayinfo ri = isect_rayinfo(v3_from4(ray->origin), v3_from4(ray->dir));
     cw_hit best;
@@ -456,7 +306,7 @@ static cw_hit brute_closest(const host_prims *h, const cw_ray *ray)
 }
 
 /* Any hit in (0, tmax) (never skip - 1). */
-static int brute_any(const host_prims *h, const cw_shadow_ray *sr)
+static int brute_any(const devscene *h, const cw_shadow_ray *sr)
 {
     cw_rayinfo ri = isect_rayinfo(v3_from4(sr->origin), v3_from4(sr->dir));
     float t;
@@ -549,7 +399,7 @@ static void random_polygon(scene *s, const double c[3], double size, int mat, in
         for (i = 0; i < k; i++)
             v[i] = vd(c, e1, e2, size * (i - 1.5), 0);
     }
-    add_polygon(s, v, k, mat);
+    tu_add_polygon(s, v, k, mat);
 }
 
 /* n random primitives (about a quarter of each kind, a few degenerate ones and exact
@@ -560,7 +410,7 @@ static void random_scene(scene *s, int n, uint64_t seed, double E)
     int i, mat;
     base_scene(s, 1, 1);
     mat = add_flat(s, grey(1));
-    rng_seed(seed);
+    tu_rng_seed(seed);
     for (i = 0; i < n; i++) {
         double c[3], sz = size * rnd_range(0.2, 1.0), d[3];
         int kind = i < 4 ? i : rnd_int(4), degenerate = i >= 4 && rnd_int(100) == 0;
@@ -580,8 +430,8 @@ static void random_scene(scene *s, int n, uint64_t seed, double E)
             }
         }
         if (kind == 0) {
-            add_sphere(s, c[0], c[1], c[2], degenerate ? 0.0 : (rnd_int(10) == 0 ? -0.5 : 0.5) * sz,
-                       mat);
+            tu_add_sphere(s, c[0], c[1], c[2],
+                          degenerate ? 0.0 : (rnd_int(10) == 0 ? -0.5 : 0.5) * sz, mat);
         } else if (kind == 1) {
             vec3f p[3];
             int k;
@@ -592,7 +442,7 @@ static void random_scene(scene *s, int n, uint64_t seed, double E)
             }
             if (degenerate) /* collinear: kept, never hit */
                 p[2] = vec3f_make(2 * p[1].x - p[0].x, 2 * p[1].y - p[0].y, 2 * p[1].z - p[0].z);
-            add_triangle(s, p[0], p[1], p[2], mat);
+            tu_add_triangle(s, p[0], p[1], p[2], mat);
         } else if (kind == 2) {
             int type = degenerate ? (rnd_int(2) ? POLY_POINT : POLY_LINE) : rnd_int(3);
             random_polygon(s, c, 0.7 * sz, mat, type);
@@ -623,7 +473,7 @@ static void random_scene(scene *s, int n, uint64_t seed, double E)
 /* A random ray: from inside the scene's box, or from outside towards a point of it, with
  * a few axis-aligned directions and directions with a zero component; 1 in 10 skips a
  * random primitive. */
-static void random_ray(const host_prims *h, double E, double o[3], double d[3], int *skip)
+static void random_ray(const devscene *h, double E, double o[3], double d[3], int *skip)
 {
     int how = rnd_int(20), k;
     if (rnd_int(2)) {
@@ -670,7 +520,7 @@ static void bvh_case(int nprim, uint64_t seed, int nrays)
 {
     const double E = 10;
     scene s;
-    host_prims h;
+    devscene h;
     cw_ray *rays = calloc((size_t)nrays, sizeof *rays);
     cw_hit *hits = calloc((size_t)nrays, sizeof *hits);
     cw_shadow_ray *sr = calloc((size_t)nrays, sizeof *sr);
@@ -688,7 +538,7 @@ static void bvh_case(int nprim, uint64_t seed, int nrays)
                                            "-DCW_HAS_MIRRORS=0",  "-DCW_HAS_REFRACTION=0"};
         expect_options(want, 6, "every primitive kind, no mirrors");
     }
-    rng_seed(seed * 7919 + 1);
+    tu_rng_seed(seed * 7919 + 1);
     for (i = 0; i < nrays; i++) {
         double o[3], d[3];
         int skip;
@@ -756,7 +606,7 @@ static void bvh_case(int nprim, uint64_t seed, int nrays)
     assert_true(by_kind[1] > 0 && by_kind[2] > 0 && by_kind[3] > 0 && by_kind[4] > 0);
     assert_true(nhit < nrays);
     assert_true(nblocked > 0 && nblocked < nrays);
-    host_free(&h);
+    devscene_free(&h);
     scene_free(&s);
     free(rays);
     free(hits);
@@ -1270,7 +1120,7 @@ static void test_cone_random(void **state)
 
     base_scene(&s, 1, 1);
     m = add_flat(&s, grey(1));
-    rng_seed(77);
+    tu_rng_seed(77);
     for (j = 0; j < NCONES; j++) {
         double dd[3];
         for (i = 0; i < 3; i++)
@@ -1371,7 +1221,7 @@ static void sphere_scene(scene *s, int depth, int mirror, int glass)
     s->max_depth = depth;
     m = add_material(s, grey(0.25f), grey(0), grey(0), grey(mirror ? 0.5f : 0),
                      grey(glass ? 0.5f : 0), 1.5f, 1);
-    add_sphere(s, 0, 0, 0, 0.5, m);
+    tu_add_sphere(s, 0, 0, 0, 0.5, m);
 }
 
 /* The image of sphere_scene: centres within 0.5 of the axis see the sphere (12 of them). */
@@ -1608,9 +1458,9 @@ static void stats_scene(scene *s, int occluder)
     m = add_material(s, vec3f_make(0.3f, 0.2f, 0.1f), vec3f_make(0.6f, 0.5f, 0.4f), grey(0.3f),
                      grey(0), grey(0), 1, 10);
     add_light(s, vec3f_make((float)LIGHT[0], (float)LIGHT[1], (float)LIGHT[2]), grey(0.8f));
-    add_sphere(s, BIG[0], BIG[1], BIG[2], BIG[3], m);
+    tu_add_sphere(s, BIG[0], BIG[1], BIG[2], BIG[3], m);
     if (occluder)
-        add_sphere(s, SMALL[0], SMALL[1], SMALL[2], SMALL[3], m);
+        tu_add_sphere(s, SMALL[0], SMALL[1], SMALL[2], SMALL[3], m);
 }
 
 /* Line o + t d (unit d) against sphere c: the nearest t > 0 or -1; *margin: how far the

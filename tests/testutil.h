@@ -8,4 +8,57 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <string.h>
+
+#include "scene.h"
+
+/* splitmix64: the same random numbers on every machine. */
+static uint64_t tu_rng_state;
+
+static inline void tu_rng_seed(uint64_t seed)
+{
+    tu_rng_state = seed;
+}
+
+static inline uint64_t tu_rng_next(void)
+{
+    uint64_t z = (tu_rng_state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* Scenes built in code: one primitive appended to s. */
+static inline void tu_add_sphere(scene *s, double x, double y, double z, double r, int mat)
+{
+    scene_sphere sp;
+    sp.center = vec3f_make((float)x, (float)y, (float)z);
+    sp.radius = (float)r;
+    sp.material = mat;
+    assert_true(scene_push(&s->spheres, &sp, sizeof sp) >= 0);
+}
+
+static inline void tu_add_triangle(scene *s, vec3f a, vec3f b, vec3f c, int mat)
+{
+    scene_triangle t;
+    memset(&t, 0, sizeof t);
+    t.p[0] = a;
+    t.p[1] = b;
+    t.p[2] = c;
+    t.material = mat;
+    assert_true(scene_push(&s->triangles, &t, sizeof t) >= 0);
+}
+
+static inline void tu_add_polygon(scene *s, const vec3f *v, int n, int mat)
+{
+    scene_polygon p;
+    int i;
+    p.first = (int)s->poly_verts.count;
+    p.count = n;
+    p.material = mat;
+    for (i = 0; i < n; i++)
+        assert_true(scene_push(&s->poly_verts, &v[i], sizeof v[i]) >= 0);
+    assert_true(scene_push(&s->polygons, &p, sizeof p) >= 0);
+}
+
 #endif

@@ -1,0 +1,373 @@
+/* The scene as the kernels see it: the arrays of kernels/types.h built from a finished
+ * scene (host/scene.h), and the BVH over all its primitives. The renderer uploads them;
+ * the tests build the same arrays to run the kernels' own functions on the host. */
+#include "devscene.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "intersect.h"
+
+cw_float4 devscene_f4(vec3f v, float w)
+{
+    cw_float4 r;
+    r.x = v.x;
+    r.y = v.y;
+    r.z = v.z;
+    r.w = w;
+    return r;
+}
+
+static void find_materials(const scene *s, devscene *ft)
+{
+    size_t i;
+    ft->mirrors = ft->transmitters = 0;
+    for (i = 0; i < s->materials.count; i++) {
+        const scene_material *m = &SCENE_AT(s->materials, scene_material, i);
+        if (m->km.x > 0 || m->km.y > 0 || m->km.z > 0)
+            ft->mirrors = 1;
+        if (m->kt.x > 0 || m->kt.y > 0 || m->kt.z > 0)
+            ft->transmitters = 1;
+    }
+}
+
+void devscene_free(devscene *ds)
+{
+    free(ds->sph);
+    free(ds->tri);
+    free(ds->normals);
+    free(ds->pg);
+    free(ds->verts);
+    free(ds->bands);
+    free(ds->cones);
+    free(ds->lights);
+    free(ds->mats);
+    free(ds->boxes);
+    free(ds->box_ref);
+    free(ds->refs);
+    bvh_free(&ds->tree);
+    bvh4_free(&ds->tree4);
+}
+
+static void box_empty(bvh_box *b)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        b->lo[k] = INFINITY;
+        b->hi[k] = -INFINITY;
+    }
+}
+
+static void box_add(bvh_box *b, float x, float y, float z)
+{
+    b->lo[0] = fminf(b->lo[0], x);
+    b->lo[1] = fminf(b->lo[1], y);
+    b->lo[2] = fminf(b->lo[2], z);
+    b->hi[0] = fmaxf(b->hi[0], x);
+    b->hi[1] = fmaxf(b->hi[1], y);
+    b->hi[2] = fmaxf(b->hi[2], z);
+}
+
+/* Box of a disc of radius rad around c, perpendicular to the unit axis a. */
+static void box_add_disc(bvh_box *b, const float c[3], const float a[3], float rad)
+{
+    float e[3];
+    int k;
+    for (k = 0; k < 3; k++)
+        e[k] = rad * sqrtf(fmaxf(0.0f, 1.0f - a[k] * a[k]));
+    box_add(b, c[0] - e[0], c[1] - e[1], c[2] - e[2]);
+    box_add(b, c[0] + e[0], c[1] + e[1], c[2] + e[2]);
+}
+
+/* Widens a box by a relative margin, so that rounding in the kernels' intersection
+ * tests never puts a hit just outside its box. */
+static void box_pad(bvh_box *b)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        float m = 1e-6f * fmaxf(fabsf(b->lo[k]), fabsf(b->hi[k]));
+        b->lo[k] -= m;
+        b->hi[k] += m;
+    }
+}
+
+static int push_box(devscene *ds, const bvh_box *b, int ref)
+{
+    bvh_box bb = *b;
+    box_pad(&bb);
+    ds->boxes[ds->nbox] = bb;
+    ds->box_ref[ds->nbox] = ref;
+    ds->nbox++;
+    return 0;
+}
+
+static int bands_push(devscene *ds, int v)
+{
+    if (ds->nbands == ds->bands_cap) {
+        size_t cap = ds->bands_cap ? 2 * ds->bands_cap : 1024;
+        int *nb = realloc(ds->bands, cap * sizeof *nb);
+        if (!nb)
+            return -1;
+        ds->bands = nb;
+        ds->bands_cap = cap;
+    }
+    ds->bands[ds->nbands++] = v;
+    return 0;
+}
+
+/* The band of projected coordinate y, computed exactly as the kernel computes it. */
+static int band_of(const cw_polygon *pg, float y)
+{
+    return (int)((y - pg->band_lo) * pg->band_scale);
+}
+
+/* The bands an edge is listed in: those its range meets, and one more each side against
+ * rounding, within [0, nb). */
+static void edge_bands(const cw_polygon *pg, float ya, float yb, int nb, int *b0, int *b1)
+{
+    *b0 = band_of(pg, fminf(ya, yb)) - 1;
+    *b1 = band_of(pg, fmaxf(ya, yb)) + 1;
+    if (*b0 < 0)
+        *b0 = 0;
+    if (*b1 > nb - 1)
+        *b1 = nb - 1;
+}
+
+/* Edge bands for a polygon of many vertices (its vertices already projected): the range
+ * of the second projected coordinate is cut into count/4 bands, and each band lists the
+ * edges whose range meets it (one band of margin each side, against rounding), so that the
+ * inside test reads a few edges instead of all. A polygon whose edges would be listed too
+ * often (long edges across many bands) keeps band_count 0: every edge is tested. The lists
+ * are filled by counting sort: one pass to size each band, one to fill. */
+static int polygon_bands(devscene *ds, cw_polygon *pg)
+{
+    const cw_float4 *v = &ds->verts[pg->first];
+    int n = pg->count, nb = n / 4, k, b, b0, b1, total = 0, *fill;
+    float lo = v[0].y, hi = v[0].y;
+    size_t table, lists;
+
+    pg->band_count = 0;
+    pg->band_first = 0;
+    pg->band_lo = 0.0f;
+    pg->band_scale = 0.0f;
+    if (n < 32)
+        return 0;
+    for (k = 1; k < n; k++) {
+        lo = fminf(lo, v[k].y);
+        hi = fmaxf(hi, v[k].y);
+    }
+    if (!(hi > lo))
+        return 0;
+    pg->band_lo = lo;
+    pg->band_scale = (float)nb / (hi - lo);
+    for (k = 0; k < n; k++) {
+        edge_bands(pg, v[k == 0 ? n - 1 : k - 1].y, v[k].y, nb, &b0, &b1);
+        total += b1 - b0 + 1;
+    }
+    if (total > 8 * n)
+        return 0;
+    /* the (first, count) table, then the lists; counts first, then prefix sums */
+    table = ds->nbands;
+    lists = table + 2 * (size_t)nb;
+    for (b = 0; b < 2 * nb + total; b++)
+        if (bands_push(ds, 0) != 0)
+            return -1;
+    for (k = 0; k < n; k++) {
+        edge_bands(pg, v[k == 0 ? n - 1 : k - 1].y, v[k].y, nb, &b0, &b1);
+        for (b = b0; b <= b1; b++)
+            ds->bands[table + 2 * (size_t)b + 1]++;
+    }
+    for (b = 0; b < nb; b++)
+        ds->bands[table + 2 * (size_t)b] =
+            b == 0 ? (int)lists
+                   : ds->bands[table + 2 * (size_t)b - 2] + ds->bands[table + 2 * (size_t)b - 1];
+    fill = malloc((size_t)nb * sizeof *fill);
+    if (!fill)
+        return -1;
+    for (b = 0; b < nb; b++)
+        fill[b] = ds->bands[table + 2 * (size_t)b];
+    for (k = 0; k < n; k++) {
+        edge_bands(pg, v[k == 0 ? n - 1 : k - 1].y, v[k].y, nb, &b0, &b1);
+        for (b = b0; b <= b1; b++)
+            ds->bands[fill[b]++] = pg->first + k;
+    }
+    free(fill);
+    pg->band_first = (int)table;
+    pg->band_count = nb;
+    return 0;
+}
+
+int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
+{
+    size_t i, nprim = s->spheres.count + s->triangles.count + s->polygons.count + s->cones.count;
+    size_t k;
+
+    memset(ds, 0, sizeof *ds);
+    if (nprim > (size_t)1 << 28) {
+        snprintf(err, errlen, "%zu primitives: more than the 2^28 the renderer can address", nprim);
+        return -1;
+    }
+    ds->sph = calloc(s->spheres.count + 1, sizeof *ds->sph);
+    ds->tri = calloc(s->triangles.count + 1, sizeof *ds->tri);
+    ds->normals = calloc(3 * s->triangles.count + 1, sizeof *ds->normals);
+    ds->pg = calloc(s->polygons.count + 1, sizeof *ds->pg);
+    ds->verts = calloc(s->poly_verts.count + 1, sizeof *ds->verts);
+    ds->cones = calloc(s->cones.count + 1, sizeof *ds->cones);
+    ds->lights = calloc(s->lights.count + 1, sizeof *ds->lights);
+    ds->mats = calloc(s->materials.count + 1, sizeof *ds->mats);
+    ds->boxes = calloc(nprim + 1, sizeof *ds->boxes);
+    ds->box_ref = calloc(nprim + 1, sizeof *ds->box_ref);
+    if (!ds->sph || !ds->tri || !ds->normals || !ds->pg || !ds->verts || !ds->cones ||
+        !ds->lights || !ds->mats || !ds->boxes || !ds->box_ref) {
+        snprintf(err, errlen, "out of memory for a scene of %zu primitives", nprim);
+        return -1;
+    }
+    for (i = 0; i < s->spheres.count; i++) {
+        const scene_sphere *ss = &SCENE_AT(s->spheres, scene_sphere, i);
+        float rad = fabsf(ss->radius);
+        bvh_box b;
+        if (!(rad > 0))
+            continue; /* no surface */
+        ds->sph[ds->nsph].center = devscene_f4(ss->center, rad);
+        ds->sph[ds->nsph].material = ss->material;
+        box_empty(&b);
+        box_add(&b, ss->center.x - rad, ss->center.y - rad, ss->center.z - rad);
+        box_add(&b, ss->center.x + rad, ss->center.y + rad, ss->center.z + rad);
+        push_box(ds, &b, CW_REF(CW_PRIM_SPHERE, ds->nsph));
+        ds->nsph++;
+    }
+    for (i = 0; i < s->triangles.count; i++) {
+        const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
+        if (scene_triangle_degenerate(st))
+            continue; /* no area, no normal */
+        cw_triangle *t = &ds->tri[ds->ntri];
+        bvh_box b;
+        box_empty(&b);
+        t->p0 = devscene_f4(st->p[0], 0);
+        t->p1 = devscene_f4(st->p[1], 0);
+        t->p2 = devscene_f4(st->p[2], 0);
+        t->material = st->material;
+        t->normals = -1;
+        if (st->has_normals) {
+            t->normals = ds->nnorm;
+            for (k = 0; k < 3; k++)
+                ds->normals[ds->nnorm++] = devscene_f4(st->n[k], 0);
+        }
+        for (k = 0; k < 3; k++)
+            box_add(&b, st->p[k].x, st->p[k].y, st->p[k].z);
+        push_box(ds, &b, CW_REF(CW_PRIM_TRIANGLE, ds->ntri));
+        ds->ntri++;
+    }
+    for (i = 0; i < s->poly_verts.count; i++)
+        ds->verts[i] = devscene_f4(SCENE_AT(s->poly_verts, vec3f, i), 0);
+    for (i = 0; i < s->polygons.count; i++) {
+        const scene_polygon *sp = &SCENE_AT(s->polygons, scene_polygon, i);
+        const vec3f *v = &SCENE_AT(s->poly_verts, vec3f, sp->first);
+        cw_polygon *pg = &ds->pg[ds->npg];
+        double nn[3], off;
+        int axis, j;
+        bvh_box b;
+        if (scene_polygon_plane(v, sp->count, nn, &off, &axis) != 0)
+            continue; /* degenerate: no area, cannot be hit */
+        pg->plane.x = (float)nn[0];
+        pg->plane.y = (float)nn[1];
+        pg->plane.z = (float)nn[2];
+        pg->plane.w = (float)off;
+        pg->first = sp->first;
+        pg->count = sp->count;
+        pg->material = sp->material;
+        pg->axis = axis;
+        { /* the kernels read the vertices projected along the dominant axis */
+            int pj;
+            for (pj = 0; pj < sp->count; pj++) {
+                vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
+                ds->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
+            }
+        }
+        if (polygon_bands(ds, pg) != 0) {
+            snprintf(err, errlen, "out of memory for polygon edge bands");
+            return -1;
+        }
+        box_empty(&b);
+        for (j = 0; j < sp->count; j++)
+            box_add(&b, v[j].x, v[j].y, v[j].z);
+        push_box(ds, &b, CW_REF(CW_PRIM_POLYGON, ds->npg));
+        ds->npg++;
+    }
+    for (i = 0; i < s->cones.count; i++) {
+        const scene_cone *sc = &SCENE_AT(s->cones, scene_cone, i);
+        cw_cone *cn = &ds->cones[ds->ncone];
+        double ax = (double)sc->apex.x - sc->base.x, ay = (double)sc->apex.y - sc->base.y,
+               az = (double)sc->apex.z - sc->base.z;
+        double h = sqrt(ax * ax + ay * ay + az * az);
+        float r0 = fabsf(sc->base_radius), r1 = fabsf(sc->apex_radius);
+        float a[3], c0[3], c1[3];
+        bvh_box b;
+        if (!(h > 0) || !(r0 > 0 || r1 > 0))
+            continue; /* no surface */
+        a[0] = (float)(ax / h);
+        a[1] = (float)(ay / h);
+        a[2] = (float)(az / h);
+        cn->base = devscene_f4(sc->base, r0);
+        cn->axis.x = a[0];
+        cn->axis.y = a[1];
+        cn->axis.z = a[2];
+        cn->axis.w = (float)h;
+        cn->apex_radius = r1;
+        cn->slope = (r1 - r0) / cn->axis.w; /* as the kernels computed it per test */
+        cn->material = sc->material;
+        c0[0] = sc->base.x;
+        c0[1] = sc->base.y;
+        c0[2] = sc->base.z;
+        c1[0] = sc->apex.x;
+        c1[1] = sc->apex.y;
+        c1[2] = sc->apex.z;
+        box_empty(&b);
+        box_add_disc(&b, c0, a, r0);
+        box_add_disc(&b, c1, a, r1);
+        push_box(ds, &b, CW_REF(CW_PRIM_CONE, ds->ncone));
+        ds->ncone++;
+    }
+    for (i = 0; i < s->lights.count; i++) {
+        const scene_light *sl = &SCENE_AT(s->lights, scene_light, i);
+        ds->lights[i].position = devscene_f4(sl->position, 0);
+        ds->lights[i].intensity = devscene_f4(sl->intensity, 0);
+    }
+    for (i = 0; i < s->materials.count; i++) {
+        const scene_material *sm = &SCENE_AT(s->materials, scene_material, i);
+        ds->mats[i].ka = devscene_f4(sm->ka, sm->p);
+        ds->mats[i].kd = devscene_f4(sm->kd, 0);
+        ds->mats[i].ks = devscene_f4(sm->ks, 0);
+        ds->mats[i].km = devscene_f4(sm->km, 0);
+        ds->mats[i].kt = devscene_f4(sm->kt, sm->ior);
+    }
+    ds->dropped = (int)nprim - ds->nbox;
+    find_materials(s, ds);
+    return 0;
+}
+
+/* Builds the BVH over the primitives' boxes, collapses it to the 4-wide tree the kernels
+ * traverse, and turns its leaf entries into CW_REFs. */
+int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
+{
+    int i;
+    if (bvh_build(&ds->tree, ds->boxes, ds->nbox, 4, err, errlen) != 0 ||
+        bvh_collapse4(&ds->tree, &ds->tree4, err, errlen) != 0)
+        return -1;
+    if (ds->tree4.stack_need > CW_BVH_STACK) {
+        snprintf(err, errlen,
+                 "the BVH needs a traversal stack of %d entries, more than the kernels' %d",
+                 ds->tree4.stack_need, CW_BVH_STACK);
+        return -1;
+    }
+    ds->refs = malloc(((size_t)ds->tree.num_refs + 1) * sizeof *ds->refs);
+    if (!ds->refs) {
+        snprintf(err, errlen, "out of memory for the BVH");
+        return -1;
+    }
+    for (i = 0; i < ds->tree.num_refs; i++)
+        ds->refs[i] = ds->box_ref[ds->tree.refs[i]];
+    return 0;
+}

@@ -1,0 +1,48 @@
+/* The scene as the kernels see it (see devscene.c). */
+#ifndef CW_DEVSCENE_H
+#define CW_DEVSCENE_H
+
+#include <stddef.h>
+
+#include "bvh.h"
+#include "scene.h"
+#include "types.h"
+
+/* The device arrays of a scene, and the BVH over all its primitives. Degenerate
+ * primitives (no surface) are left out, the others keep their order within their kind:
+ * a hit's index is an index into these arrays. */
+typedef struct {
+    cw_sphere *sph;
+    cw_triangle *tri;
+    cw_float4 *normals;
+    cw_polygon *pg;
+    cw_float4 *verts;
+    cw_cone *cones;
+    cw_light *lights;
+    cw_material *mats;
+    bvh_box *boxes;
+    int *box_ref; /* box i bounds primitive box_ref[i] (a CW_REF) */
+    int *refs;    /* BVH leaf entries as CW_REFs */
+    int *bands;   /* edge bands of large polygons (cw_polygon) */
+    size_t nbands, bands_cap;
+    int nsph, ntri, nnorm, npg, ncone, nbox;
+    bvh tree;
+    bvh4 tree4;
+    int dropped;      /* primitives left out as degenerate */
+    int mirrors;      /* some material has km > 0 */
+    int transmitters; /* some material has kt > 0 */
+} devscene;
+
+cw_float4 devscene_f4(vec3f v, float w);
+
+/* Builds the arrays and the primitives' boxes (no BVH yet). Returns 0, or -1 with err
+ * (too many primitives, out of memory); call devscene_free either way. */
+int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen);
+
+/* Builds the BVH over the boxes, collapses it to the 4-wide tree the kernels traverse and
+ * turns its leaf entries into CW_REFs. Returns 0, or -1 with err. */
+int devscene_build_bvh(devscene *ds, char *err, size_t errlen);
+
+void devscene_free(devscene *ds);
+
+#endif
