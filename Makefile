@@ -29,13 +29,16 @@ LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson 2>/dev/null) $(E
 GUI_CFLAGS = $(shell pkg-config --cflags glfw3 x11 2>/dev/null)
 CFLAGS  += $(WARN) $(OPT) $(PKG_CFLAGS) $(GUI_CFLAGS)
 
-KERNEL_SRC := kernels/compat.h kernels/types.h kernels/camera.h kernels/intersect.h kernels/bvh.h \
-              kernels/shade.h kernels/clwhitted.cl
+# Host modules: every host/*.c but main.c goes into a static library that clwhitted, the
+# tools and the tests link, so each program holds only the objects it uses.
 LIB_SRC := $(filter-out host/main.c,$(wildcard host/*.c))
 LIB_OBJ := $(patsubst host/%.c,$(BUILD)/%.o,$(LIB_SRC)) $(BUILD)/kernels_src.o
+LIB     := $(BUILD)/libclwhitted.a
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(patsubst tests/%.c,$(BUILD)/%,$(TEST_SRC))
 DEFAULT_SCENE := scenes/default.json
+# Header dependencies, written by the compiler (-MMD -MP) and by tools/embed-kernels.sh.
+DEPFLAGS = -MMD -MP
 
 .PHONY: all render test clean deps format format-check install uninstall gallery bench spd-counts
 all: $(BUILD)/clwhitted $(BUILD)/scene2pov
@@ -43,25 +46,35 @@ all: $(BUILD)/clwhitted $(BUILD)/scene2pov
 $(BUILD):
 	mkdir -p $(BUILD)
 
-# The kernel sources are embedded in the binary, concatenated with #line markers.
-$(BUILD)/kernels_src.c: $(KERNEL_SRC) tools/embed-kernels.sh | $(BUILD)
-	sh tools/embed-kernels.sh $(KERNEL_SRC) > $@.tmp && mv $@.tmp $@
+# The kernel program is embedded in the binary: kernels/clwhitted.cl with every local
+# #include inlined, with #line markers (tools/embed-kernels.sh writes its dependencies).
+$(BUILD)/kernels_src.c: kernels/clwhitted.cl tools/embed-kernels.sh | $(BUILD)
+	sh tools/embed-kernels.sh kernels/clwhitted.cl $@.tmp $(BUILD)/kernels_src.d.tmp
+	sed 's|$@.tmp|$@|' $(BUILD)/kernels_src.d.tmp > $(BUILD)/kernels_src.d
+	rm -f $(BUILD)/kernels_src.d.tmp
+	mv $@.tmp $@
 
 $(BUILD)/kernels_src.o: $(BUILD)/kernels_src.c
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
 
-$(BUILD)/%.o: host/%.c $(wildcard host/*.h) kernels/types.h kernels/compat.h | $(BUILD)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
+$(BUILD)/%.o: host/%.c | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) -c $< -o $@
 
-$(BUILD)/clwhitted: $(BUILD)/main.o $(LIB_OBJ)
+$(LIB): $(LIB_OBJ)
+	rm -f $@
+	$(AR) rcs $@ $^
+
+$(BUILD)/clwhitted: $(BUILD)/main.o $(LIB)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 
 # Converts a scene to POV-Ray SDL with the same model (for comparisons and benchmarks).
-$(BUILD)/scene2pov: tools/scene2pov.c $(LIB_OBJ)
-	$(CC) $(CPPFLAGS) $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -o $@
+$(BUILD)/scene2pov: tools/scene2pov.c $(LIB) | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
-$(BUILD)/test_%: tests/test_%.c tests/testutil.h $(LIB_OBJ) $(KERNEL_SRC) $(wildcard host/*.h)
-	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -lcmocka -o $@
+$(BUILD)/test_%: tests/test_%.c $(LIB) | $(BUILD)
+	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -lcmocka -o $@
+
+-include $(wildcard $(BUILD)/*.d)
 
 deps:
 	sh tools/install-deps
@@ -96,7 +109,8 @@ uninstall:
 gallery: $(BUILD)/clwhitted
 	SPD_DIR='$(SPD_DIR)' sh tools/gallery $(BUILD)/clwhitted
 
-FORMAT_SRC = host/*.c host/*.h tests/*.c tests/*.h tools/*.c
+FORMAT_SRC = host/*.c host/*.h kernels/*.h kernels/*.cl tests/*.c tests/*.h tests/fuzz/*.c \
+             tests/fuzz/*.h tools/*.c
 
 # Speed against POV-Ray on the SPD scenes (tools/bench --help); not part of make test.
 bench: $(BUILD)/clwhitted $(BUILD)/scene2pov
@@ -127,8 +141,8 @@ PORTABILITY_ARGS ?=
 .PHONY: portability portability-tools
 portability-tools: $(BUILD)/clwhitted $(PORTABILITY_TOOLS)
 
-$(BUILD)/imgcmp: tools/imgcmp.c $(LIB_OBJ) host/image.h
-	$(CC) $(CPPFLAGS) $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -o $@
+$(BUILD)/imgcmp: tools/imgcmp.c $(LIB) | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
 $(BUILD)/cldevices: tools/cldevices.c | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $< -lOpenCL -o $@
@@ -152,8 +166,8 @@ QUALITY_ARGS   ?=
 all: $(BUILD)/imgtool
 test: $(BUILD)/imgtool
 
-$(BUILD)/imgtool: tools/imgtool.c $(LIB_OBJ)
-	$(CC) $(CPPFLAGS) $(CFLAGS) $< $(LIB_OBJ) $(LDLIBS) -o $@
+$(BUILD)/imgtool: tools/imgtool.c $(LIB) | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
 quality: $(BUILD)/clwhitted $(BUILD)/imgtool
 	tools/quality-report --figure docs/quality/quality.png --table docs/quality/quality.md \

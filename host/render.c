@@ -14,6 +14,7 @@
 #include "devscene.h"
 #include "clerr.h"
 #include "progcache.h"
+#include "world.h"
 
 static double seconds_now(void)
 {
@@ -31,7 +32,6 @@ _Static_assert(sizeof(cw_cone) == 48, "cw_cone layout");
 _Static_assert(sizeof(cw_shadow_ray) == 64, "cw_shadow_ray layout");
 _Static_assert(sizeof(cw_polygon) == 48, "cw_polygon layout");
 
-#define CW_WORLD_NARGS 10 /* CW_WORLD_ARGS in kernels/clwhitted.cl */
 _Static_assert(sizeof(cw_material) == 80, "cw_material layout");
 _Static_assert(sizeof(cw_light) == 32, "cw_light layout");
 _Static_assert(sizeof(cw_frame) == 192, "cw_frame layout");

@@ -7,6 +7,7 @@
 #include "intersect.h"
 #include "shade.h"
 #include "types.h"
+#include "world.h"
 
 #if (CW_HAS_SPHERES | CW_HAS_TRIANGLES | CW_HAS_POLYGONS | CW_HAS_CONES | CW_HAS_MIRRORS |         \
      CW_HAS_REFRACTION | CW_FAST | CW_STATS) &                                                     \
@@ -16,27 +17,6 @@
 #if !CW_FAST && defined(__FAST_RELAXED_MATH__)
 #error "the robust path (CW_FAST=0) must not be built with -cl-fast-relaxed-math"
 #endif
-
-#define CW_WORLD_ARGS                                                                              \
-    __global const cw_frame *f, __global const cw_bvh4_node *nodes, __global const int *refs,      \
-        __global const cw_sphere *spheres, __global const cw_triangle *triangles,                  \
-        __global const float4 *normals, __global const cw_polygon *polygons,                       \
-        __global const float4 *poly_verts, __global const int *poly_bands,                         \
-        __global const cw_cone *cones
-
-#define CW_MAKE_WORLD(w)                                                                           \
-    do {                                                                                           \
-        (w).spheres = spheres;                                                                     \
-        (w).triangles = triangles;                                                                 \
-        (w).normals = normals;                                                                     \
-        (w).polygons = polygons;                                                                   \
-        (w).poly_verts = poly_verts;                                                               \
-        (w).poly_bands = poly_bands;                                                               \
-        (w).cones = cones;                                                                         \
-        (w).nodes = nodes;                                                                         \
-        (w).refs = refs;                                                                           \
-        (w).num_nodes = f->num_nodes;                                                              \
-    } while (0)
 
 /* 2-D launch over a band of rows: x = column, y = row within the band (image row 0 at
  * the top). Ray k of the band is pixel (x, row0 + y); the pixel's sample count (.w of

@@ -7,6 +7,7 @@
 #define CW_INTERSECT_H
 
 #include "types.h"
+#include "world.h"
 
 #ifndef CW_HAS_SPHERES
 #define CW_HAS_SPHERES 1
@@ -27,20 +28,6 @@
 /* Finite stand-ins for infinity: the fast path is built with -cl-fast-relaxed-math,
  * which lets the compiler assume no value is infinite. */
 #define CW_FAR 1e30f /* tmax of camera and secondary rays */
-
-/* The scene as the kernels see it. */
-typedef struct {
-    CW_GLOBAL const cw_sphere *spheres;
-    CW_GLOBAL const cw_triangle *triangles;
-    CW_GLOBAL const cw_float4 *normals; /* vertex normals of smooth triangles */
-    CW_GLOBAL const cw_polygon *polygons;
-    CW_GLOBAL const cw_float4 *poly_verts;
-    CW_GLOBAL const int *poly_bands; /* edge bands of large polygons (cw_polygon) */
-    CW_GLOBAL const cw_cone *cones;
-    CW_GLOBAL const cw_bvh4_node *nodes; /* the 4-wide BVH */
-    CW_GLOBAL const int *refs;           /* BVH leaf entries: CW_REF(kind, index) */
-    int num_nodes;
-} cw_world;
 
 /* A ray with what the tests need precomputed once: the inverse direction for the box
  * test, and the axis permutation and shear of the watertight triangle test. */

@@ -1,0 +1,31 @@
+/* Every limit and default of clwhitted in one place (like Lua's luaconf.h). The readers,
+ * the scene checks, the command line, the renderer and the preview all take their bounds
+ * from here; messages print these values. */
+#ifndef CW_CONFIG_H
+#define CW_CONFIG_H
+
+/* Image size: pixels per side and per image (the per-image bound keeps the ~44 bytes of
+ * device and host memory per pixel within reach). */
+#define CW_MAX_SIDE 65536
+#define CW_MAX_PIXELS (1L << 28)
+
+/* Ray depth: the eye ray is depth 1; at most CW_MAX_DEPTH, CW_DEFAULT_DEPTH when the scene
+ * and the command line say nothing. */
+#define CW_MAX_DEPTH 64
+#define CW_DEFAULT_DEPTH 5
+
+/* Samples per pixel (--spp): 1..CW_MAX_SPP. */
+#define CW_MAX_SPP 65536
+
+/* PNG exposure (--exposure EV): -CW_MAX_EXPOSURE..CW_MAX_EXPOSURE. */
+#define CW_MAX_EXPOSURE 64
+
+/* Scene files: bytes per file, magnitude of any number, vertices per polygon or patch. */
+#define CW_MAX_FILE_BYTES (1L << 30)
+#define CW_MAX_ABS 1e30
+#define CW_MAX_VERTS 10000000
+
+/* The preview's default samples per pixel before it stops refining. */
+#define CW_PREVIEW_DEFAULT_SPP 16
+
+#endif

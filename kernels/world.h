@@ -1,0 +1,49 @@
+/* The kernel buffer list: every read-only scene buffer the kernels take, in kernel
+ * argument order, written once. The kernels' parameters (CW_WORLD_ARGS), the cw_world
+ * struct, its binding (CW_MAKE_WORLD) and the argument indices (cw_world_arg) are generated
+ * from it here; the host generates its cl_mem fields, uploads, release and argument binding
+ * from the same list (host/render.c). Adding a buffer is one line in CW_WORLD_BUFFERS. */
+#ifndef CW_WORLD_H
+#define CW_WORLD_H
+
+#include "types.h"
+
+/* X(element type, name): one line per buffer. */
+#define CW_WORLD_BUFFERS(X)                                                                        \
+    X(cw_bvh4_node, nodes) /* the 4-wide BVH */                                                    \
+    X(int, refs)           /* BVH leaf entries: CW_REF(kind, index) */                             \
+    X(cw_sphere, spheres)                                                                          \
+    X(cw_triangle, triangles)                                                                      \
+    X(cw_float4, normals) /* vertex normals of smooth triangles */                                 \
+    X(cw_polygon, polygons)                                                                        \
+    X(cw_float4, poly_verts)                                                                       \
+    X(int, poly_bands) /* edge bands of large polygons (cw_polygon) */                             \
+    X(cw_cone, cones)
+
+/* The scene as the kernels see it. */
+typedef struct {
+#define CW_WORLD_FIELD(type, name) CW_GLOBAL const type *name;
+    CW_WORLD_BUFFERS(CW_WORLD_FIELD)
+#undef CW_WORLD_FIELD
+    int num_nodes; /* from the frame: 0 for an empty scene */
+} cw_world;
+
+/* Kernel argument indices: the frame first, then each buffer; kernels that take the world
+ * have their own arguments from CW_WORLD_NARGS on. */
+#define CW_WORLD_INDEX(type, name) CW_WORLD_ARG_##name,
+enum cw_world_arg { CW_WORLD_ARG_frame, CW_WORLD_BUFFERS(CW_WORLD_INDEX) CW_WORLD_NARGS };
+#undef CW_WORLD_INDEX
+
+/* The parameters of an entry kernel that takes the world: the frame f, then the buffers. */
+#define CW_WORLD_PARAM(type, name) , CW_GLOBAL const type *name
+#define CW_WORLD_ARGS CW_GLOBAL const cw_frame *f CW_WORLD_BUFFERS(CW_WORLD_PARAM)
+
+/* Binds the parameters of CW_WORLD_ARGS into the cw_world w. */
+#define CW_WORLD_BIND(type, name) (w).name = name;
+#define CW_MAKE_WORLD(w)                                                                           \
+    do {                                                                                           \
+        CW_WORLD_BUFFERS(CW_WORLD_BIND)                                                            \
+        (w).num_nodes = f->num_nodes;                                                              \
+    } while (0)
+
+#endif
