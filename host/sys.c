@@ -35,8 +35,8 @@ int sys_has_ext(const char *path, const char *ext)
     return *dot == '\0' && *ext == '\0';
 }
 
-int sys_read_file(const char *path, size_t max_bytes, int stop_at_nul, const char *what,
-                  char **out, size_t *outlen, char *err, size_t errlen)
+int sys_read_file(const char *path, size_t max_bytes, int stop_at_nul, const char *what, char **out,
+                  size_t *outlen, char *err, size_t errlen)
 {
     struct stat st;
     FILE *f;

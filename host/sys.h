@@ -17,8 +17,8 @@ int sys_has_ext(const char *path, const char *ext);
  * kind of file in the size message: "a scene file"). With stop_at_nul, reading stops
  * after the first chunk holding a NUL byte (text readers reject it with its line, so
  * /dev/zero is not read forever). Returns 0, or -1 with err. */
-int sys_read_file(const char *path, size_t max_bytes, int stop_at_nul, const char *what,
-                  char **out, size_t *outlen, char *err, size_t errlen);
+int sys_read_file(const char *path, size_t max_bytes, int stop_at_nul, const char *what, char **out,
+                  size_t *outlen, char *err, size_t errlen);
 
 /* Atomic replacement: write into a temporary file beside the destination (created with
  * O_EXCL, never following a link; mode 0666 & ~umask), then rename it over the
