@@ -55,8 +55,7 @@ struct renderer {
     cl_program program;
     char options[1024]; /* build options of `program` */
     cl_kernel k_raygen, k_intersect, k_shade, k_occlude;
-    cl_ulong max_alloc;  /* CL_DEVICE_MAX_MEM_ALLOC_SIZE */
-    cl_ulong global_mem; /* CL_DEVICE_GLOBAL_MEM_SIZE */
+    cl_ulong max_alloc; /* CL_DEVICE_MAX_MEM_ALLOC_SIZE */
     /* scene buffers */
     cl_mem frame, nodes, refs, spheres, triangles, normals, polygons, verts, bands, cones, lights,
         materials;
@@ -219,9 +218,6 @@ int renderer_create(renderer **out, const char *spec, char *err, size_t errlen)
     }
     e = clGetDeviceInfo(r->device, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof r->max_alloc, &r->max_alloc,
                         NULL);
-    if (e == CL_SUCCESS)
-        e = clGetDeviceInfo(r->device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof r->global_mem,
-                            &r->global_mem, NULL);
     if (e != CL_SUCCESS) {
         cl_fail(e, "clGetDeviceInfo(memory limits)", r, err, errlen);
         goto out_free;
@@ -509,10 +505,6 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     r->stats.build_s = seconds_now() - t0;
 
     fill_view(f, s);
-    f->num_spheres = ds.nsph;
-    f->num_triangles = ds.ntri;
-    f->num_polygons = ds.npg;
-    f->num_cones = ds.ncone;
     f->num_lights = (int)s->lights.count;
     f->num_nodes = ds.tree4.num_nodes;
     f->spd_rays = r->settings.spd;

@@ -6,9 +6,7 @@
 
 #ifdef __OPENCL_VERSION__
 
-#define CW_KERNEL __kernel
 #define CW_GLOBAL __global
-#define CW_CONSTANT __constant
 #define CW_INLINE static inline
 
 typedef float4 cw_float4;
@@ -123,9 +121,7 @@ CW_INLINE void cw_atomic_add(volatile __global float *p, float v)
 
 #include <math.h>
 
-#define CW_KERNEL
 #define CW_GLOBAL
-#define CW_CONSTANT
 #define CW_INLINE static inline
 
 typedef struct {

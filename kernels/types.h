@@ -109,11 +109,10 @@ typedef struct {
     int projection;       /* CW_PROJ_* */
     int nx, ny;           /* image size in pixels */
     int max_depth;        /* the eye ray is depth 1 */
-    int num_spheres, num_triangles, num_polygons, num_cones;
     int num_lights;
     int num_nodes; /* BVH nodes; 0: empty scene */
     int spd_rays;  /* SPD counting: transmitters spawn a reflection ray even when km = 0 */
-    int pad0, pad1, pad2, pad3;
+    int pad0, pad1, pad2, pad3, pad4, pad5, pad6;
 } cw_frame;
 
 typedef struct {

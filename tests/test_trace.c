@@ -1036,8 +1036,7 @@ static void test_cone_cases(void **state)
  * The quadratic's discriminant B^2 - AC is k^2 |op|^2 = 2.25 k^2 while B^2 and AC are each
  * about (k (r0 + k D))^2: in float the difference is lost once k D reaches a few thousand
  * (relative size (1.5 / (k D))^2 below the float epsilon), and the cone is missed.
- * KNOWN TO FAIL with kernels/intersect.h as of 31ef6a9 (see the report of issue 8): left in
- * on purpose until isect_cone solves from an origin moved near the cone. */
+ * isect_cone solves from an origin moved near the cone, which keeps it. */
 static void test_cone_flat_far(void **state)
 {
     static const double cases[][2] = {{0.1, 50}, {1e-2, 10}, {1e-2, 100}, {1e-3, 5}, {1e-3, 20}};
