@@ -933,12 +933,12 @@ static void png_warning_cb(png_structp png, png_const_charp msg)
     (void)msg; /* warnings (e.g. about ancillary chunks) are not errors for us */
 }
 
-static double srgb_encode(double x)
+double image_srgb_encode(double x)
 {
     return x <= 0.0031308 ? 12.92 * x : 1.055 * pow(x, 1.0 / 2.4) - 0.055;
 }
 
-static double srgb_decode(double v)
+double image_srgb_decode(double v)
 {
     return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
 }
@@ -951,7 +951,7 @@ static unsigned char to_srgb8(double x)
         return 0;
     if (x >= 1.0)
         return 255;
-    return (unsigned char)floor(srgb_encode(x) * 255.0 + 0.5);
+    return (unsigned char)floor(image_srgb_encode(x) * 255.0 + 0.5);
 }
 
 /* The PNG text chunks and modification time of image_write_opts' metadata. */
@@ -1273,14 +1273,14 @@ int image_read_png(const char *path, int srgb_dec, image *img, char *err, size_t
         if (d.depth == 8) {
             float lut[256];
             for (int v = 0; v < 256; v++)
-                lut[v] = (float)(srgb_dec ? srgb_decode(v / 255.0) : v / 255.0);
+                lut[v] = (float)(srgb_dec ? image_srgb_decode(v / 255.0) : v / 255.0);
             for (size_t i = 0; i < n; i++)
                 img->rgb[i] = lut[d.data[i]];
         } else {
             const uint16_t *s = (const uint16_t *)(const void *)d.data;
             for (size_t i = 0; i < n; i++) {
                 double v = s[i] / 65535.0;
-                img->rgb[i] = (float)(srgb_dec ? srgb_decode(v) : v);
+                img->rgb[i] = (float)(srgb_dec ? image_srgb_decode(v) : v);
             }
         }
     }

@@ -43,6 +43,9 @@ int image_write_ex(const image *img, const char *path, const image_write_opts *o
 /* The PNG display value of a linear value, before sRGB encoding: exposure, tone map, clamp
  * to [0,1] (NaN -> 0). */
 double image_display_value(double linear, double exposure, int tonemap);
+/* The sRGB transfer function and its inverse, on [0,1] (IEC 61966-2-1). */
+double image_srgb_encode(double linear);
+double image_srgb_decode(double encoded);
 /* "clamp", "reinhard", "aces" -> IMAGE_TONEMAP_*, or -1; and back. */
 int image_tonemap_parse(const char *name);
 const char *image_tonemap_name(int tonemap);

@@ -299,11 +299,6 @@ static double now_s(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
-static double srgb_decode(double v)
-{
-    return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
-}
-
 /* The code of image_write_png: floor(encode(x) * 255 + 0.5), clamped, NaN -> 0; as a
  * search over the thresholds (identical except within rounding of a threshold). */
 static void srgb_init(pv *p)
@@ -311,7 +306,7 @@ static void srgb_init(pv *p)
     int c;
     p->thr[0] = 0.0;
     for (c = 1; c < 256; c++)
-        p->thr[c] = srgb_decode((c - 0.5) / 255.0);
+        p->thr[c] = image_srgb_decode((c - 0.5) / 255.0);
 }
 
 static unsigned char srgb8(const pv *p, float f)
@@ -738,7 +733,7 @@ static int grab(pv *p, const char *path)
     for (y = 0; y < p->fb_h; y++)
         for (x = 0; x < p->fb_w; x++)
             for (c = 0; c < 3; c++)
-                img.rgb[3 * ((size_t)y * p->fb_w + x) + c] = (float)srgb_decode(
+                img.rgb[3 * ((size_t)y * p->fb_w + x) + c] = (float)image_srgb_decode(
                     px[3 * ((size_t)(p->fb_h - 1 - y) * p->fb_w + x) + c] / 255.0);
     rc = image_write(&img, path, p->err, sizeof p->err);
 out:
