@@ -91,6 +91,7 @@ test: $(BUILD)/clwhitted $(TEST_BIN)
 	    echo "== $$t"; $$t || fail=1; \
 	done; \
 	sh tests/cli.sh $(BUILD)/clwhitted || fail=1; \
+	sh tests/build.sh $(BUILD) || fail=1; \
 	sh tests/install.sh || fail=1; \
 	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \
 	sh tests/quality.sh $(BUILD)/clwhitted $(BUILD)/imgtool || fail=1; \
