@@ -1,4 +1,6 @@
-/* Images: linear float RGB in memory, written as OpenEXR (linear) or PNG (sRGB). */
+/* Images: linear float RGB in memory, written as OpenEXR (linear) or PNG (sRGB); tone maps
+ * and the sRGB transfer pair. Reading images: image_read.h; comparing them: image_diff.h
+ * (tests and tools; clwhitted itself only writes). */
 #ifndef CW_IMAGE_H
 #define CW_IMAGE_H
 
@@ -54,31 +56,8 @@ const char *image_library_versions(void);
 
 /* Checks that image_write can write this kind of file (.exr or .png), before a render. */
 int image_check_path(const char *path, char *err, size_t errlen);
+/* image_write in one format whatever the extension, with the default options. */
 int image_write_exr(const image *img, const char *path, char *err, size_t errlen);
 int image_write_png(const image *img, const char *path, char *err, size_t errlen);
-
-/* Readers (for tests and tools). image_read_exr returns the linear values.
- * image_read_png returns the stored values scaled to [0,1] (8- or 16-bit), decoded from
- * sRGB when srgb_decode != 0, else as stored (e.g. POV-Ray's linear 16-bit output). */
-int image_read_exr(const char *path, image *img, char *err, size_t errlen);
-int image_read_png(const char *path, int srgb_decode, image *img, char *err, size_t errlen);
-
-typedef struct {
-    double max_abs;  /* largest absolute channel difference over compared pixels */
-    double mean_abs; /* mean absolute channel difference over compared pixels */
-    long compared;   /* pixels compared (mask != 0) */
-    long over;       /* compared pixels with any channel differing by more than tol */
-    int worst_x, worst_y;
-} image_diff_stats;
-
-/* Compares a and b (same size) on the pixels where mask is non-zero (mask NULL: all).
- * Returns 0, or -1 when the sizes differ. */
-int image_compare(const image *a, const image *b, const unsigned char *mask, double tol,
-                  image_diff_stats *st);
-
-/* Writes a diff image: |a-b| scaled by `gain` per channel, pixels over tol in red when
- * the mask allows them, masked-out pixels dimmed. Format by extension. */
-int image_write_diff(const image *a, const image *b, const unsigned char *mask, double tol,
-                     double gain, const char *path, char *err, size_t errlen);
 
 #endif

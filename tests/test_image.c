@@ -1,7 +1,9 @@
-/* Tests for host/image.c: EXR and PNG I/O, the temp+rename guarantee, comparison, diffs. */
+/* Tests for host/image*.c: EXR and PNG I/O, the temp+rename guarantee, comparison, diffs. */
 #include "testutil.h"
 
 #include "image.h"
+#include "image_diff.h"
+#include "image_read.h"
 
 #include <dirent.h>
 #include <errno.h>

@@ -32,6 +32,8 @@
 #include <unistd.h>
 
 #include "image.h"
+#include "image_diff.h"
+#include "image_read.h"
 #include "pov.h"
 #include "render.h"
 #include "scene.h"

@@ -29,6 +29,8 @@
 #include <cJSON.h>
 
 #include "image.h"
+#include "image_diff.h"
+#include "image_read.h"
 #include "scene.h"
 
 #define BIN "build/clwhitted"

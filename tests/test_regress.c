@@ -12,6 +12,8 @@
 #include "testutil.h"
 
 #include "image.h"
+#include "image_diff.h"
+#include "image_read.h"
 #include "render.h"
 #include "scene.h"
 

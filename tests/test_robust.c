@@ -49,6 +49,7 @@
 #include "devscene.h"
 
 #include "image.h"
+#include "image_diff.h"
 #include "render.h"
 #include "scene.h"
 

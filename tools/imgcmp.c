@@ -17,6 +17,9 @@
 #include <string.h>
 
 #include "image.h"
+#include "image_diff.h"
+#include "image_read.h"
+#include "sys.h"
 
 static void usage(FILE *f)
 {
@@ -57,17 +60,11 @@ static int parse_double(const char *opt, const char *s, double lo, double hi, do
     return 0;
 }
 
-static int has_suffix(const char *s, const char *suf)
-{
-    size_t n = strlen(s), m = strlen(suf);
-    return n >= m && strcmp(s + n - m, suf) == 0;
-}
-
 static int read_image(const char *path, image *img)
 {
     char err[1024];
-    int rc = has_suffix(path, ".png") ? image_read_png(path, 1, img, err, sizeof err)
-                                      : image_read_exr(path, img, err, sizeof err);
+    int rc = sys_has_ext(path, ".png") ? image_read_png(path, 1, img, err, sizeof err)
+                                       : image_read_exr(path, img, err, sizeof err);
     if (rc != 0)
         fprintf(stderr, "imgcmp: %s\n", err);
     return rc;

@@ -8,6 +8,8 @@
 #include <string.h>
 
 #include "image.h"
+#include "image_read.h"
+#include "sys.h"
 
 static void usage(FILE *f)
 {
@@ -19,27 +21,11 @@ static void usage(FILE *f)
                "Exit status: 0 success, 1 input or output error, 2 usage error.\n");
 }
 
-static int has_suffix(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    size_t i;
-    if (n < m)
-        return 0;
-    for (i = 0; i < m; i++) {
-        char c = s[n - m + i];
-        if (c >= 'A' && c <= 'Z')
-            c = (char)(c - 'A' + 'a');
-        if (c != suffix[i])
-            return 0;
-    }
-    return 1;
-}
-
 static int read_any(const char *path, image *img, char *err, size_t errlen)
 {
-    if (has_suffix(path, ".exr"))
+    if (sys_has_ext(path, ".exr"))
         return image_read_exr(path, img, err, errlen);
-    if (has_suffix(path, ".png"))
+    if (sys_has_ext(path, ".png"))
         return image_read_png(path, 1, img, err, errlen);
     snprintf(err, errlen, "%s: unsupported image extension (expected .exr or .png)", path);
     return -1;

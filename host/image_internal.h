@@ -1,0 +1,71 @@
+/* Internal to the image files (image.c, image_exr.c, image_png.c, image_read.c,
+ * image_diff.c): what the writers, the readers and the comparison share. Other modules use
+ * image.h, image_read.h and image_diff.h. */
+#ifndef CW_IMAGE_INTERNAL_H
+#define CW_IMAGE_INTERNAL_H
+
+#include <stddef.h>
+#include <time.h>
+
+#include <openexr.h>
+#include <png.h>
+
+#include "image.h"
+
+/* Formats a message into err (nothing when err is NULL or errlen is 0). */
+void image_set_err(char *err, size_t errlen, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Rejects images that cannot be written or whose size overflows: 0, or -1 with err. */
+int image_check_writable(const image *img, const char *path, char *err, size_t errlen);
+
+/* Tone maps an exposed linear value to [0,1]; NaN and non-positive values give 0. */
+double image_tonemap_value(double x, int tonemap);
+
+/* Metadata times: local time as "YYYY:MM:DD hh:mm:ss" (the EXR capDate form) with UTC
+ * minus local time in seconds (the EXR utcOffset); UTC as ISO 8601 (the PNG Creation
+ * Time). An empty string when the time cannot be converted. */
+void image_local_date(time_t t, char *buf, size_t n, float *utc_offset);
+void image_iso8601_utc(time_t t, char *buf, size_t n);
+
+/* The writers behind image_write_ex (o not NULL), in image_exr.c and image_png.c. */
+int image_exr_write(const image *img, const char *path, const image_write_opts *o, char *err,
+                    size_t errlen);
+int image_png_write(const image *img, const char *path, const image_write_opts *o, char *err,
+                    size_t errlen);
+
+/* OpenEXRCore error handling, shared by the EXR writer and reader (image_exr.c).
+ * Per-context state: the last message OpenEXRCore reported, and (for writing) our own
+ * output stream on the temporary file's descriptor, so that every write error is ours to
+ * see and the library never opens or unlinks files itself. */
+typedef struct {
+    char msg[512];
+    int fd;
+    int write_errno;
+} image_exr_state;
+
+/* The context's error handler: stores the message in its image_exr_state (user data). */
+void image_exr_error_cb(exr_const_context_t ctxt, exr_result_t code, const char *msg);
+/* Formats "path: what failed: CODE (message)" for an OpenEXRCore result. */
+void image_exr_fail(char *err, size_t errlen, const char *path, const char *what, exr_result_t rv,
+                    const image_exr_state *st);
+/* Checks the result of an OpenEXRCore call: on failure names the step in *what and
+ * returns 1; on success clears the stored library message, so that a later failure's
+ * message is its own. */
+int image_exr_failed(image_exr_state *st, exr_result_t rv, const char *desc, const char **what);
+
+/* libpng error handling, shared by the PNG writer and reader (image_png.c): the error
+ * callback records the message and longjmps back to the setjmp in the function that owns
+ * the png struct. Those functions only modify state in objects owned by their callers
+ * after setjmp, so nothing of theirs can be clobbered. */
+typedef struct {
+    char msg[256];
+} image_png_errctx;
+
+void image_png_error_cb(png_structp png, png_const_charp msg);
+void image_png_warning_cb(png_structp png, png_const_charp msg); /* ignores warnings */
+
+#endif
