@@ -145,8 +145,8 @@ portability-tools: $(BUILD)/clwhitted $(PORTABILITY_TOOLS)
 $(BUILD)/imgcmp: tools/imgcmp.c $(LIB) | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
-$(BUILD)/cldevices: tools/cldevices.c | $(BUILD)
-	$(CC) $(CPPFLAGS) $(CFLAGS) $< -lOpenCL -o $@
+$(BUILD)/cldevices: tools/cldevices.c $(LIB) | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) -lOpenCL -o $@
 
 $(BUILD)/oclgrind-fill-shim.so: tools/oclgrind-fill-shim.c | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -shared $< -o $@

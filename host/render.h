@@ -1,4 +1,5 @@
-/* The OpenCL renderer: device choice, program build, scene upload, passes. */
+/* The OpenCL renderer: device choice, program build, scene upload, passes (render.c;
+ * the test hooks are in render_debug.h). */
 #ifndef CW_RENDER_H
 #define CW_RENDER_H
 
@@ -6,11 +7,10 @@
 
 #include "image.h"
 #include "scene.h"
-#include "types.h"
 
 typedef struct renderer renderer;
 
-/* Lists every OpenCL platform and device on stdout (host/devices.c). Returns 0, or -1
+/* Lists every OpenCL platform and device on stdout (--list-devices). Returns 0, or -1
  * with err. */
 int renderer_list_devices(char *err, size_t errlen);
 
@@ -80,18 +80,5 @@ int renderer_render(renderer *r, image *img, char *err, size_t errlen);
 int renderer_set_view(renderer *r, const scene *s, char *err, size_t errlen);
 int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size_t errlen);
 int renderer_read(renderer *r, image *img, char *err, size_t errlen);
-
-/* For tests: runs the ray-generation kernel and returns nx*ny rays (rays must hold that
- * many), and runs the intersection kernel (closest hit over the BVH) on the given rays;
- * a ray's skip field (1 + a primitive reference, 0 for none) must be set. */
-int renderer_generate_rays(renderer *r, cw_ray *rays, char *err, size_t errlen);
-int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, char *err,
-                       size_t errlen);
-/* For tests: runs the shadow-ray (any hit) kernel on n shadow rays (origin.w = tmax) and
- * sets blocked[i] to 1 when something lies on ray i, else 0. */
-int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocked, char *err,
-                      size_t errlen);
-/* For tests: the build options of the kernel program built last ("" before any build). */
-const char *renderer_build_options(const renderer *r);
 
 #endif

@@ -9,6 +9,7 @@
 #include "testutil.h"
 
 #include "render.h"
+#include "render_debug.h"
 #include "scene.h"
 
 static renderer *R;
@@ -17,19 +18,13 @@ static char err[2048];
 static int setup(void **state)
 {
     (void)state;
-    if (renderer_create(&R, NULL, err, sizeof err) != 0) {
-        fprintf(stderr, "renderer_create: %s\n", err);
-        return -1;
-    }
-    printf("device: %s\n", renderer_device_name(R));
-    return 0;
+    return tu_renderer_open(&R, 1);
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    renderer_destroy(R);
-    return 0;
+    return tu_renderer_close(&R);
 }
 
 /* A camera at eye with basis x, y, z (w = +z), window [-1,1]^2, d = 1. */

@@ -29,18 +29,13 @@ static char err[2048];
 static int setup(void **state)
 {
     (void)state;
-    if (renderer_create(&R, NULL, err, sizeof err) != 0) {
-        fprintf(stderr, "renderer_create: %s\n", err);
-        return -1;
-    }
-    return 0;
+    return tu_renderer_open(&R, 0);
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    renderer_destroy(R);
-    return 0;
+    return tu_renderer_close(&R);
 }
 
 static void regress(const char *scene_path, const char *name, int w, int h, int depth)

@@ -40,17 +40,18 @@
 #include <sys/stat.h>
 #include <time.h>
 
-#include "testutil.h"
-
 /* The kernels' geometry, compiled as host C99 (kernels/compat.h). Included before the
  * host headers: shade.h names a parameter like the host type `image`. */
 #include "shade.h"
+
+#include "testutil.h"
 
 #include "devscene.h"
 
 #include "image.h"
 #include "image_diff.h"
 #include "render.h"
+#include "render_debug.h"
 #include "scene.h"
 
 #define U_F 5.9604644775390625e-8 /* u = 2^-24 */

@@ -8,8 +8,10 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <stdio.h>
 #include <string.h>
 
+#include "render.h"
 #include "scene.h"
 
 /* splitmix64: the same random numbers on every machine. */
@@ -59,6 +61,28 @@ static inline void tu_add_polygon(scene *s, const vec3f *v, int n, int mat)
     for (i = 0; i < n; i++)
         assert_true(scene_push(&s->poly_verts, &v[i], sizeof v[i]) >= 0);
     assert_true(scene_push(&s->polygons, &p, sizeof p) >= 0);
+}
+
+/* The renderer fixture of the kernel suites: a renderer on the default device (PoCL),
+ * made before the group (printing "device: NAME" when show_device is set) and destroyed
+ * after it. Returns 0, or -1 with the reason on stderr (the group then fails). */
+static inline int tu_renderer_open(renderer **r, int show_device)
+{
+    char e[2048];
+    if (renderer_create(r, NULL, e, sizeof e) != 0) {
+        fprintf(stderr, "renderer_create: %s\n", e);
+        return -1;
+    }
+    if (show_device)
+        printf("device: %s\n", renderer_device_name(*r));
+    return 0;
+}
+
+static inline int tu_renderer_close(renderer **r)
+{
+    renderer_destroy(*r);
+    *r = NULL;
+    return 0;
 }
 
 #endif

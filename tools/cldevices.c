@@ -5,12 +5,14 @@
  *   local-mem-bytes  max-alloc-bytes  compute-units  driver-version
  * fp64 is "yes" when the device reports cl_khr_fp64 (or a non-zero double config), else
  * "no". Exit status: 0, or 1 when the OpenCL runtime cannot be queried (no platform is
- * not an error: nothing is printed). */
+ * not an error: nothing is printed). The enumeration is clwhitted's own (host/cl_device.c). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include <CL/cl.h>
+
+#include "cl_device.h"
 
 static void info_str(cl_device_id d, cl_device_info what, char *buf, size_t n)
 {
@@ -36,20 +38,14 @@ static const char *type_name(cl_device_type t)
 
 int main(void)
 {
+    char err[512];
     cl_uint np = 0, p;
     cl_platform_id *plats;
-    cl_int e = clGetPlatformIDs(0, NULL, &np);
-    /* -1001 is CL_PLATFORM_NOT_FOUND_KHR (cl_ext.h): the ICD loader found no platform */
-    if (e == -1001 || (e == CL_SUCCESS && np == 0))
+    int rc = cldev_platforms(&plats, &np, err, sizeof err);
+    if (rc == 1) /* no platform: nothing to list */
         return 0;
-    if (e != CL_SUCCESS) {
-        fprintf(stderr, "cldevices: clGetPlatformIDs failed (%d)\n", (int)e);
-        return 1;
-    }
-    plats = calloc(np, sizeof *plats);
-    if (!plats || clGetPlatformIDs(np, plats, NULL) != CL_SUCCESS) {
-        fprintf(stderr, "cldevices: cannot list the platforms\n");
-        free(plats);
+    if (rc != 0) {
+        fprintf(stderr, "cldevices: %s\n", err);
         return 1;
     }
     for (p = 0; p < np; p++) {
@@ -59,13 +55,8 @@ int main(void)
         if (clGetPlatformInfo(plats[p], CL_PLATFORM_NAME, sizeof pname, pname, NULL) != CL_SUCCESS)
             snprintf(pname, sizeof pname, "?");
         pname[sizeof pname - 1] = '\0';
-        if (clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, 0, NULL, &nd) != CL_SUCCESS || nd == 0)
-            continue;
-        devs = calloc(nd, sizeof *devs);
-        if (!devs || clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, nd, devs, NULL) != CL_SUCCESS) {
-            free(devs);
-            continue;
-        }
+        if (cldev_devices(plats[p], &devs, &nd, err, sizeof err) != 0)
+            continue; /* a platform that cannot list its devices lists none */
         for (d = 0; d < nd; d++) {
             char name[256], ver[256], cver[256], drv[256], ext[8192];
             cl_device_type type = 0;

@@ -1,0 +1,27 @@
+/* The renderer's test hooks: single kernels run on given rays, and the build options. The
+ * test suites use them; the clwhitted binary does not link them (render_debug.c). */
+#ifndef CW_RENDER_DEBUG_H
+#define CW_RENDER_DEBUG_H
+
+#include <stddef.h>
+
+#include "render.h"
+#include "types.h"
+
+/* Runs the ray-generation kernel and returns nx*ny rays (rays must hold that many). */
+int renderer_generate_rays(renderer *r, cw_ray *rays, char *err, size_t errlen);
+
+/* Runs the intersection kernel (closest hit over the BVH) on the given rays; a ray's skip
+ * field (1 + a primitive reference, 0 for none) must be set. */
+int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, char *err,
+                       size_t errlen);
+
+/* Runs the shadow-ray (any hit) kernel on n shadow rays (origin.w = tmax) and sets
+ * blocked[i] to 1 when something lies on ray i, else 0. */
+int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocked, char *err,
+                      size_t errlen);
+
+/* The build options of the kernel program built last ("" before any build). */
+const char *renderer_build_options(const renderer *r);
+
+#endif

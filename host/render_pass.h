@@ -1,0 +1,53 @@
+/* The device side of a render (see render_pass.c). For render.c and render_debug.c. */
+#ifndef CW_RENDER_PASS_H
+#define CW_RENDER_PASS_H
+
+#include <stddef.h>
+
+#include "render_impl.h"
+
+/* Writes "CALL failed: NAME (CODE) on device DEVICE" to err. Returns -1. */
+int rpass_fail(cl_int e, const char *call, const renderer *r, char *err, size_t errlen);
+
+/* -1 with err unless a scene is uploaded. */
+int rpass_need_scene(const renderer *r, char *err, size_t errlen);
+
+/* Checks that a buffer fits the device before asking for it, so that a scene too big
+ * for the device gets a message naming the buffer ("what") rather than a driver error. */
+int rpass_check_alloc(const renderer *r, const char *what, size_t bytes, char *err, size_t errlen);
+
+/* Releases *m (if any) and sets it to NULL. */
+void rpass_release(cl_mem *m);
+
+/* Makes *m a read-write buffer of at least need bytes (contents not kept); *cap is its
+ * size. Returns 0, or -1 with err. */
+int rpass_ensure_buffer(renderer *r, cl_mem *m, size_t *cap, size_t need, const char *what,
+                        char *err, size_t errlen);
+int rpass_fill_zero(renderer *r, cl_mem m, size_t size, const char *what, char *err, size_t errlen);
+int rpass_read(renderer *r, cl_mem m, size_t size, void *dst, const char *what, char *err,
+               size_t errlen);
+int rpass_write(renderer *r, cl_mem m, size_t size, const void *src, const char *what, char *err,
+                size_t errlen);
+
+/* The accumulation image (nx * ny pixels of rgb + sample count) and the counters;
+ * rpass_clear_accumulation also zeroes the image. */
+int rpass_ensure_image(renderer *r, char *err, size_t errlen);
+int rpass_clear_accumulation(renderer *r, char *err, size_t errlen);
+
+/* Rows per band: a band's ray queues, hits and shadow rays stay within about 64 MB. */
+int rpass_band_rows(const renderer *r);
+
+/* The kernel launches: eye rays for rows [row0, row0 + nrows) at sample position (sx, sy)
+ * into rays[0]; the closest hits of n rays into hits; n shadow rays from shadows into the
+ * image. */
+int rpass_raygen(renderer *r, int row0, int nrows, float sx, float sy, char *err, size_t errlen);
+int rpass_intersect(renderer *r, cl_mem *rays, cl_int n, char *err, size_t errlen);
+int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen);
+
+/* Traces sample number `sample` for rows [row0, row0 + nrows) into the accumulation image:
+ * ray generation, then per depth level one intersect, one shade and one occlude launch.
+ * Progress is reported after each level as done + share * (the band's part done). */
+int rpass_trace_band(renderer *r, int sample, int row0, int nrows, double done, double share,
+                     char *err, size_t errlen);
+
+#endif
