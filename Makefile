@@ -3,7 +3,8 @@
 #   make render   install missing packages, build, render the default scene
 #   make test     build and run the whole test suite (on PoCL)
 #   make install  install clwhitted and its man page (PREFIX, BINDIR, MANDIR, DESTDIR)
-#   make gallery  render docs/gallery/ (the SPD scenes from SPD_DIR and the default scene)
+#   make gallery  render build/gallery/ (the SPD scenes from SPD_DIR and the default scene);
+#                 UPDATE_DOCS=1 also copies it over docs/gallery/
 #   make format   clang-format the C sources; make format-check checks them (CI)
 
 CC      ?= cc
@@ -95,6 +96,7 @@ test: $(BUILD)/clwhitted $(TEST_BIN)
 	sh tests/install.sh || fail=1; \
 	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \
 	sh tests/quality.sh $(BUILD)/clwhitted $(BUILD)/imgtool || fail=1; \
+	sh tests/docs.sh $(BUILD)/clwhitted || fail=1; \
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
 
 # The installed binary needs nothing else at run time: the kernels are embedded.
@@ -106,9 +108,15 @@ install: $(BUILD)/clwhitted
 uninstall:
 	rm -f $(DESTDIR)$(BINDIR)/clwhitted $(DESTDIR)$(MANDIR)/man1/clwhitted.1
 
-# The seven SPD scenes at 512x512 and the default scene, with times, in docs/gallery/.
+# The seven SPD scenes at 512x512 and the default scene, with times, in build/gallery/.
+# The tracked docs/gallery/ and docs/quality/ change only when asked: UPDATE_DOCS=1 copies
+# the results of `make gallery` and `make quality` over them.
+UPDATE_DOCS ?=
 gallery: $(BUILD)/clwhitted
-	SPD_DIR='$(SPD_DIR)' sh tools/gallery $(BUILD)/clwhitted
+	SPD_DIR='$(SPD_DIR)' GALLERY_DIR='$(BUILD)/gallery' sh tools/gallery $(BUILD)/clwhitted
+ifeq ($(UPDATE_DOCS),1)
+	cp $(BUILD)/gallery/README.md $(BUILD)/gallery/*.png docs/gallery/
+endif
 
 FORMAT_SRC = host/*.c host/*.h kernels/*.h kernels/*.cl tests/*.c tests/*.h tests/fuzz/*.c \
              tests/fuzz/*.h tools/*.c
@@ -157,9 +165,10 @@ portability: portability-tools
 
 # --- Speed against error (tools/quality-report) ---
 # build/imgtool: image conversions for the report (EXR to raw float32). `make quality` runs
-# the report on three SPD scenes (they live outside the repository: QUALITY_SCENES), writes
-# the figure and the tables to docs/quality/ and the README's table (about 20 minutes on two
-# cores). QUALITY_ARGS="--replot" redoes the outputs from the last run without rendering.
+# the report on three SPD scenes (they live outside the repository: QUALITY_SCENES) and
+# writes everything to build/quality/, with the figure and the tables of all the scenes
+# (quality.png, quality.md); UPDATE_DOCS=1 also copies those two over docs/quality/.
+# QUALITY_ARGS="--replot" redoes the outputs from the last run without rendering.
 QUALITY_SCENES ?= ../shared/scenes/spd/tetra.nff ../shared/scenes/spd/balls.nff \
                   ../shared/scenes/spd/teapot.nff
 QUALITY_ARGS   ?=
@@ -171,8 +180,12 @@ $(BUILD)/imgtool: tools/imgtool.c $(LIB) | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
 quality: $(BUILD)/clwhitted $(BUILD)/imgtool
-	tools/quality-report --figure docs/quality/quality.png --table docs/quality/quality.md \
-	    --readme README.md -W 256 -H 256 $(QUALITY_ARGS) $(QUALITY_SCENES)
+	tools/quality-report --clwhitted $(BUILD)/clwhitted --imgtool $(BUILD)/imgtool \
+	    -o $(BUILD)/quality --figure $(BUILD)/quality/quality.png \
+	    --table $(BUILD)/quality/quality.md -W 256 -H 256 $(QUALITY_ARGS) $(QUALITY_SCENES)
+ifeq ($(UPDATE_DOCS),1)
+	cp $(BUILD)/quality/quality.png $(BUILD)/quality/quality.md docs/quality/
+endif
 
 # ---- Robustness: fuzzing and the sanitizer build ----------------------------------------------
 #   make fuzz [FUZZ_SECONDS=60]  builds a libFuzzer target per scene reader (clang,

@@ -101,7 +101,7 @@ check_grep "--help: tonemap default" "(default: clamp)" "$T/out"
 check_grep "--help: exit status" "Exit status: 0 success, 1 input or render error, 2 usage error" "$T/out"
 for v in CLWHITTED_BUILD_OPTIONS CLWHITTED_PROGRESS POCL_DEVICES POCL_CACHE_DIR; do
     check_grep "--help documents $v" "^  $v " "$T/out"
-    check_true "README documents $v" grep -q "^| \`$v\`" "$ROOT/README.md"
+    check_true "docs/usage.md documents $v" grep -q "^| \`$v\`" "$ROOT/docs/usage.md"
 done
 
 # usage errors: exit 2, one line naming the problem, then the hint

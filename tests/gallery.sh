@@ -40,5 +40,16 @@ check_true "default scene at its own size" grep -q '`clwhitted -o default.png sc
 check_true "eight rows" test "$(grep -c '^| [a-z]* | <img' "$T/g/README.md")" -eq 8
 [ $fails -eq 0 ] || sed 's/^/    /' "$T/g/README.md"
 
+# make gallery writes into build/gallery/; the tracked docs/gallery/ only with UPDATE_DOCS=1
+# (what make would run, without running it)
+env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL -u UPDATE_DOCS make -n gallery >"$T/log" 2>&1
+check "make -n gallery" 0 $?
+check_true "make gallery renders into build/gallery" grep -q "GALLERY_DIR='build/gallery'" "$T/log"
+check_true "make gallery leaves docs/ alone" sh -c "! grep -q 'docs/' '$T/log'"
+env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL -u UPDATE_DOCS make -n gallery UPDATE_DOCS=1 >"$T/log" 2>&1
+check "make -n gallery UPDATE_DOCS=1" 0 $?
+check_true "UPDATE_DOCS=1 copies the gallery into docs/gallery" \
+    grep -q '^cp build/gallery/README.md build/gallery/\*.png docs/gallery/$' "$T/log"
+
 echo "gallery.sh: $pass passed, $fails failed"
 [ "$fails" -eq 0 ]

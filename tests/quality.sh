@@ -24,11 +24,12 @@ if [ $? -eq 1 ]; then ok; else fail "imgtool on a missing file: exit 1 expected"
 
 tools/quality-report --clwhitted "$BIN" --imgtool "$IMGTOOL" -o "$T/q" -W 32 -H 24 \
     --spp 4 --depth 1,5 --precision robust --ref-spp 4 --ref-depth 5 --repeat 1 \
-    --figure "$T/all.png" scenes/default.json >"$T/out" 2>"$T/err"
+    --figure "$T/all.png" --table "$T/all.md" scenes/default.json >"$T/out" 2>"$T/err"
 rc=$?
 if [ $rc -eq 0 ]; then ok; else fail "quality-report exit $rc"; sed 's/^/    /' "$T/err"; fi
 CSV=$T/q/default/quality.csv
-for f in "$CSV" "$T/q/default/quality.png" "$T/q/default/reference.exr" "$T/all.png"; do
+for f in "$CSV" "$T/q/default/quality.png" "$T/q/default/reference.exr" "$T/all.png" \
+    "$T/all.md"; do
     if [ -s "$f" ]; then ok; else fail "quality-report wrote no $(basename "$f")"; fi
 done
 if [ -s "$CSV" ]; then
@@ -49,6 +50,9 @@ if [ -s "$CSV" ]; then
                 END { exit n != 1 }' "$CSV"; then ok; else fail "Pareto flags"; cat "$CSV"; fi
 fi
 if grep -q '^| 4 | 1 | robust |' "$T/out"; then ok; else fail "table not printed"; cat "$T/out"; fi
+if [ "$(head -n 1 "$T/all.md" 2>/dev/null)" = "# Speed against error: the measurements" ] &&
+    grep -q '^| 4 | 1 | robust |' "$T/all.md"; then ok; else
+    fail "--table: a title and the table expected"; cat "$T/all.md"; fi
 
 # bad input: exit 1 or 2 with a message
 tools/quality-report --clwhitted "$BIN" --imgtool "$IMGTOOL" -o "$T/q" "$T/missing.nff" \
@@ -56,6 +60,23 @@ tools/quality-report --clwhitted "$BIN" --imgtool "$IMGTOOL" -o "$T/q" "$T/missi
 if [ $? -eq 1 ] && grep -q "no such scene" "$T/err"; then ok; else fail "missing scene"; fi
 tools/quality-report --spp 0 scenes/default.json >"$T/out" 2>"$T/err"
 if [ $? -eq 2 ]; then ok; else fail "--spp 0: usage error expected"; fi
+# no option rewrites a file in place (the README's table is gone)
+tools/quality-report --readme README.md scenes/default.json >"$T/out" 2>"$T/err"
+if [ $? -eq 2 ]; then ok; else fail "--readme: usage error expected"; fi
+
+# make quality writes into build/quality/; the tracked docs/quality/ only with UPDATE_DOCS=1,
+# and never README.md (what make would run, without running it)
+env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL -u UPDATE_DOCS make -n quality >"$T/out" 2>&1
+if [ $? -eq 0 ] && grep -q -- '-o build/quality --figure build/quality/quality.png' "$T/out" &&
+    ! grep -q -e 'docs/' -e 'README' "$T/out"; then ok; else
+    fail "make quality: build/quality/ only expected"; sed 's/^/    /' "$T/out"; fi
+env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL -u UPDATE_DOCS make -n quality UPDATE_DOCS=1 >"$T/out" 2>&1
+if [ $? -eq 0 ] &&
+    grep -q '^cp build/quality/quality.png build/quality/quality.md docs/quality/$' "$T/out" &&
+    ! grep -q 'README' "$T/out"; then ok; else
+    fail "make quality UPDATE_DOCS=1: a copy into docs/quality/ expected"
+    sed 's/^/    /' "$T/out"
+fi
 
 echo "quality.sh: $pass passed, $fails failed"
 [ $fails -eq 0 ]
