@@ -138,7 +138,7 @@ format-check:
 clean:
 	rm -rf $(BUILD) build-asan build-fuzz
 
-# ---- Portability check (tools/portability-check; README, "Portability check") ----------
+# ---- Portability check (tools/portability-check; docs/portability.md) ---------------------
 # build/imgcmp compares images under the check's tolerance; build/cldevices lists the
 # OpenCL devices with their limits; build/oclgrind-fill-shim.so works around an Oclgrind
 # false positive in its uninitialised-value check.

@@ -3,7 +3,7 @@
  * optionally writes a diff image. Also perturbs images on purpose, so that the check can
  * prove it fails (tools/portability-check --self-test).
  *
- * The rule (README, "Portability check"): a pixel is "over" when any channel differs by
+ * The rule (docs/portability.md): a pixel is "over" when any channel differs by
  * more than --tol; the images agree when
  *   - both have the same size and only finite values,
  *   - at most --max-over of the pixels are over (a fraction, rounded down, but at least
