@@ -13,6 +13,7 @@
 #include "progress.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "version.h"
 
 #define HINT "Try 'clwhitted --help'.\n"

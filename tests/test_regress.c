@@ -14,6 +14,7 @@
 #include "image.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 
 #define REF_DIR "tests/ref"
 #define OUT_DIR "build/test-output"

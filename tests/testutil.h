@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "scene.h"
+#include "scene_geom.h"
 
 /* splitmix64: the same random numbers on every machine. */
 static uint64_t tu_rng_state;

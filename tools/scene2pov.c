@@ -6,8 +6,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pov.h"
+#include "config.h"
 #include "scene.h"
+#include "scene_load.h"
+#include "scene_pov.h"
 
 static void usage(FILE *f)
 {
@@ -75,13 +77,13 @@ int main(int argc, char **argv)
             usage(stdout);
             return 0;
         } else if (strcmp(a, "-W") == 0 || strcmp(a, "--width") == 0) {
-            if (parse_int("--width", i + 1 < argc ? argv[++i] : NULL, 1, 65536, &width))
+            if (parse_int("--width", i + 1 < argc ? argv[++i] : NULL, 1, CW_MAX_SIDE, &width))
                 return 2;
         } else if (strcmp(a, "-H") == 0 || strcmp(a, "--height") == 0) {
-            if (parse_int("--height", i + 1 < argc ? argv[++i] : NULL, 1, 65536, &height))
+            if (parse_int("--height", i + 1 < argc ? argv[++i] : NULL, 1, CW_MAX_SIDE, &height))
                 return 2;
         } else if (strcmp(a, "-d") == 0 || strcmp(a, "--depth") == 0) {
-            if (parse_int("--depth", i + 1 < argc ? argv[++i] : NULL, 1, 64, &depth))
+            if (parse_int("--depth", i + 1 < argc ? argv[++i] : NULL, 1, CW_MAX_DEPTH, &depth))
                 return 2;
         } else if (strcmp(a, "--spd") == 0) {
             spd = 1;
