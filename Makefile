@@ -202,7 +202,12 @@ FUZZ_SECONDS ?= 60
 FUZZ_TARGETS := nff json
 FUZZ_CFLAGS  := -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined \
                 -fno-sanitize-recover=all
-FUZZ_SRC     := host/scene.c host/nff.c host/scene_json.c
+# Each target links the scene model and its one reader, nothing else (no cJSON for NFF).
+FUZZ_SRC       := host/scene.c host/scene_geom.c host/scene_io.c host/sys.c
+FUZZ_SRC_nff   := $(FUZZ_SRC) host/scene_nff.c
+FUZZ_SRC_json  := $(FUZZ_SRC) host/scene_json.c host/scene_json_value.c
+FUZZ_LIBS_json  = $(shell pkg-config --libs libcjson 2>/dev/null)
+FUZZ_HEADERS   := tests/fuzz/fuzz_check.h host/config.h host/sys.h $(wildcard host/scene*.h)
 # Inputs up to 64 KiB (larger seeds, such as the SPD scenes, are cut there); 10 s per input
 # is a hang; one allocation over 256 MiB or 2 GiB in all is a failure.
 FUZZ_OPTS    := -max_len=65536 -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=256 \
@@ -224,10 +229,12 @@ ASAN_ENV     := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_
 .PHONY: fuzz fuzz-build asan
 $(BUILD)/test_fuzzcorpus: tests/fuzz/fuzz_check.h
 
-$(FUZZ_BUILD)/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz_check.h $(FUZZ_SRC) host/scene.h
+# The sources of target T are FUZZ_SRC_T, its libraries FUZZ_LIBS_T.
+.SECONDEXPANSION:
+$(FUZZ_BUILD)/fuzz_%: tests/fuzz/fuzz_%.c $$(FUZZ_SRC_$$*) $(FUZZ_HEADERS)
 	@mkdir -p $(FUZZ_BUILD)
-	$(FUZZ_CC) $(CPPFLAGS) $(WARN) $(FUZZ_CFLAGS) $(PKG_CFLAGS) $< $(FUZZ_SRC) \
-	    $(shell pkg-config --libs libcjson 2>/dev/null) -lm -o $@
+	$(FUZZ_CC) $(CPPFLAGS) $(WARN) $(FUZZ_CFLAGS) $(PKG_CFLAGS) $< $(FUZZ_SRC_$*) \
+	    $(FUZZ_LIBS_$*) -lm -o $@
 
 fuzz-build: $(FUZZ_TARGETS:%=$(FUZZ_BUILD)/fuzz_%)
 

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "intersect.h"
+#include "scene_geom.h"
 
 cw_float4 devscene_f4(vec3f v, float w)
 {

@@ -11,6 +11,7 @@
 #include "progress.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "sys.h"
 #include "version.h"
 

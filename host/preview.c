@@ -50,6 +50,7 @@
 #include "image.h"
 #include "preview.h"
 #include "render.h"
+#include "sys.h"
 #include "viewcam.h"
 
 #define PV_DEFAULT_SPP 16
@@ -1425,7 +1426,8 @@ int preview_run(scene *s, const preview_options *o)
     }
     if (o->script) {
         size_t len;
-        if (scene_read_file(o->script, &p->script, &len, p->err, sizeof p->err) != 0)
+        if (sys_read_file(o->script, CW_MAX_FILE_BYTES, 1, "a scene file", &p->script, &len, p->err,
+                          sizeof p->err) != 0)
             goto out;
     }
     the_preview = p;

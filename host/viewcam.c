@@ -1,6 +1,8 @@
 /* The preview's interactive camera (see viewcam.h). */
 #include "viewcam.h"
 
+#include "scene_geom.h"
+
 #include <math.h>
 #include <stdio.h>
 

@@ -6,38 +6,16 @@
 
 #include "fuzz/fuzz_check.h"
 
+#include "config.h"
+#include "scene_json.h"
+#include "scene_nff.h"
+#include "sys.h"
+
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-
-/* Reads a whole file, bytes as they are (NUL bytes included). */
-static unsigned char *read_bytes(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *buf = NULL;
-    size_t cap = 0, n = 0, got;
-    if (!f)
-        return NULL;
-    do {
-        if (n == cap) {
-            unsigned char *nb = realloc(buf, cap ? cap * 2 : 4096);
-            if (!nb) {
-                free(buf);
-                fclose(f);
-                return NULL;
-            }
-            buf = nb;
-            cap = cap ? cap * 2 : 4096;
-        }
-        got = fread(buf + n, 1, cap - n, f);
-        n += got;
-    } while (got > 0);
-    fclose(f);
-    *len = n;
-    return buf;
-}
 
 /* Runs every regular file of dir through the reader; returns how many, failing on the first
  * input that breaks the property. */
@@ -49,20 +27,21 @@ static int replay_dir(const char *dir, fuzz_parser parse, const char *name)
     if (!d)
         fail_msg("%s: cannot open the corpus folder", dir);
     while ((e = readdir(d)) != NULL) {
-        char path[1024], why[1536];
+        char path[1024], why[1536], err[1280];
         struct stat st;
-        unsigned char *data;
+        char *data;
         size_t len = 0;
         snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
         if (e->d_name[0] == '.' || stat(path, &st) != 0 || !S_ISREG(st.st_mode))
             continue;
-        data = read_bytes(path, &len);
-        if (!data) {
-            print_error("%s: cannot read\n", path);
+        /* the bytes as they are, NUL bytes included */
+        if (sys_read_file(path, CW_MAX_FILE_BYTES, 0, "a fuzz input", &data, &len, err,
+                          sizeof err) != 0) {
+            print_error("%s\n", err);
             failed++;
             continue;
         }
-        if (fuzz_check(parse, name, data, len, why, sizeof why) != 0) {
+        if (fuzz_check(parse, name, (const unsigned char *)data, len, why, sizeof why) != 0) {
             print_error("%s: %s\n", path, why);
             failed++;
         }
@@ -75,24 +54,29 @@ static int replay_dir(const char *dir, fuzz_parser parse, const char *name)
     return count;
 }
 
+/* Replays the seeds and the regression inputs of one fuzz target; returns the seeds. */
+static int replay_target(const char *target, fuzz_parser parse, const char *name)
+{
+    char seeds_dir[256], regressions_dir[256];
+    int seeds, regressions;
+    snprintf(seeds_dir, sizeof seeds_dir, "tests/fuzz/corpus/%s", target);
+    snprintf(regressions_dir, sizeof regressions_dir, "tests/fuzz/regressions/%s", target);
+    seeds = replay_dir(seeds_dir, parse, name);
+    regressions = replay_dir(regressions_dir, parse, name);
+    print_message("%s: %d seeds, %d regression inputs\n", target, seeds, regressions);
+    return seeds;
+}
+
 static void test_nff_corpus(void **state)
 {
-    int seeds, regressions;
     (void)state;
-    seeds = replay_dir("tests/fuzz/corpus/nff", nff_parse, "fuzz.nff");
-    regressions = replay_dir("tests/fuzz/regressions/nff", nff_parse, "fuzz.nff");
-    print_message("nff: %d seeds, %d regression inputs\n", seeds, regressions);
-    assert_true(seeds > 0);
+    assert_true(replay_target("nff", nff_parse, "fuzz.nff") > 0);
 }
 
 static void test_json_corpus(void **state)
 {
-    int seeds, regressions;
     (void)state;
-    seeds = replay_dir("tests/fuzz/corpus/json", json_scene_parse, "fuzz.json");
-    regressions = replay_dir("tests/fuzz/regressions/json", json_scene_parse, "fuzz.json");
-    print_message("json: %d seeds, %d regression inputs\n", seeds, regressions);
-    assert_true(seeds > 0);
+    assert_true(replay_target("json", json_scene_parse, "fuzz.json") > 0);
 }
 
 /* The property itself must be able to fail. */
@@ -108,38 +92,15 @@ static int accept_anything(const char *text, size_t len, const char *name, scene
     return 0;
 }
 
-static int fail_with(const char *msg, char *err, size_t errlen)
+/* A reader that fails with the message in `canned_msg`. */
+static const char *canned_msg;
+
+static int canned(const char *text, size_t len, const char *name, scene *s, char *err,
+                  size_t errlen)
 {
-    snprintf(err, errlen, "%s", msg);
+    (void)text, (void)len, (void)name, (void)s;
+    snprintf(err, errlen, "%s", canned_msg);
     return -1;
-}
-
-static int no_line(const char *text, size_t len, const char *name, scene *s, char *err,
-                   size_t errlen)
-{
-    (void)text, (void)len, (void)name, (void)s;
-    return fail_with("x.nff: broken", err, errlen);
-}
-
-static int line_too_far(const char *text, size_t len, const char *name, scene *s, char *err,
-                        size_t errlen)
-{
-    (void)text, (void)len, (void)name, (void)s;
-    return fail_with("x.nff:3: broken", err, errlen);
-}
-
-static int control_char(const char *text, size_t len, const char *name, scene *s, char *err,
-                        size_t errlen)
-{
-    (void)text, (void)len, (void)name, (void)s;
-    return fail_with("x.nff:2: found '\x1b[31m'", err, errlen);
-}
-
-static int good_message(const char *text, size_t len, const char *name, scene *s, char *err,
-                        size_t errlen)
-{
-    (void)text, (void)len, (void)name, (void)s;
-    return fail_with("x.nff:2: expected a number, found '\\x1B'", err, errlen);
 }
 
 static void test_property_fails(void **state)
@@ -149,13 +110,17 @@ static void test_property_fails(void **state)
     (void)state;
     assert_int_equal(fuzz_check(accept_anything, "x.nff", two_lines, 3, why, sizeof why), -1);
     assert_non_null(strstr(why, "scene_finish failed"));
-    assert_int_equal(fuzz_check(no_line, "x.nff", two_lines, 3, why, sizeof why), -1);
+    canned_msg = "x.nff: broken";
+    assert_int_equal(fuzz_check(canned, "x.nff", two_lines, 3, why, sizeof why), -1);
     assert_non_null(strstr(why, "no line number"));
-    assert_int_equal(fuzz_check(line_too_far, "x.nff", two_lines, 3, why, sizeof why), -1);
+    canned_msg = "x.nff:3: broken";
+    assert_int_equal(fuzz_check(canned, "x.nff", two_lines, 3, why, sizeof why), -1);
     assert_non_null(strstr(why, "1..2"));
-    assert_int_equal(fuzz_check(control_char, "x.nff", two_lines, 3, why, sizeof why), -1);
+    canned_msg = "x.nff:2: found '\x1b[31m'";
+    assert_int_equal(fuzz_check(canned, "x.nff", two_lines, 3, why, sizeof why), -1);
     assert_non_null(strstr(why, "control character 0x1b"));
-    assert_int_equal(fuzz_check(good_message, "x.nff", two_lines, 3, why, sizeof why), 0);
+    canned_msg = "x.nff:2: expected a number, found '\\x1B'";
+    assert_int_equal(fuzz_check(canned, "x.nff", two_lines, 3, why, sizeof why), 0);
 }
 
 int main(void)

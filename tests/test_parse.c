@@ -1,9 +1,15 @@
-/* Tests for the scene readers: host/nff.c (NFF, the SPD scenes) and host/scene_json.c
+/* Tests for the scene readers: host/scene_nff.c (NFF, the SPD scenes) and host/scene_json.c
  * (the native JSON format). Good input is checked value by value; every class of bad input
  * must fail with "name:line: message". Runs from the repository root. */
 #include "testutil.h"
 
+#include "config.h"
 #include "scene.h"
+#include "scene_geom.h"
+#include "scene_json.h"
+#include "scene_load.h"
+#include "scene_nff.h"
+#include "sys.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -11,7 +17,6 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
 #define EPS 1e-5f
@@ -114,7 +119,7 @@ static void test_nff_entities(void **state)
     assert_vec(s.background, 0.1f, 0.2f, 0.3f);
     assert_int_equal(s.width, 3);
     assert_int_equal(s.height, 3);
-    assert_int_equal(s.max_depth, SCENE_DEFAULT_MAX_DEPTH);
+    assert_int_equal(s.max_depth, CW_DEFAULT_DEPTH);
 
     /* lights: the colourless one gets sqrt(L)/(2L), the coloured one keeps its colour */
     assert_int_equal(s.lights.count, 2);
@@ -297,22 +302,15 @@ static void test_nff_load_files(void **state)
 
 /* ---- the SPD scenes ---- */
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
 static void load_and_finish(const char *path, scene *s, double *secs)
 {
     char err[512];
     double t0;
     scene_init(s);
-    t0 = now();
+    t0 = sys_now();
     if (scene_load(path, s, err, sizeof err) != 0)
         fail_msg("%s", err);
-    *secs = now() - t0;
+    *secs = sys_now() - t0;
     if (scene_finish(s, 0, 0, 0, err, sizeof err) != 0)
         fail_msg("%s", err);
 }
@@ -1134,16 +1132,16 @@ static void test_nff_bad_absurd_counts(void **state)
     nff_bad(VIEW "p -2147483648\n", "x.nff:8: ", "at least 3", NULL, NULL);
     nff_bad(VIEW "p 0x10\n", "x.nff:8: ", NULL, NULL, NULL); /* hexadecimal: 16, then EOF */
     getrusage(RUSAGE_SELF, &before);
-    t0 = now();
+    t0 = sys_now();
     nff_bad(VIEW "p 10000000\n0 0 0\n1 0 0\n", "x.nff:10: ", "file ended inside 'p 10000000'",
             "found 2", NULL);
     nff_bad(VIEW "pp 10000000\n0 0 0 0 0 1\n", "x.nff:9: ", "file ended inside 'pp 10000000'", NULL,
             NULL);
     getrusage(RUSAGE_SELF, &after);
-    print_message("two 10^7-vertex headers: %.1f ms, peak memory +%ld KiB\n", (now() - t0) * 1e3,
-                  after.ru_maxrss - before.ru_maxrss);
+    print_message("two 10^7-vertex headers: %.1f ms, peak memory +%ld KiB\n",
+                  (sys_now() - t0) * 1e3, after.ru_maxrss - before.ru_maxrss);
     assert_true(after.ru_maxrss - before.ru_maxrss < 32 * 1024);
-    assert_true(now() - t0 < 1.0);
+    assert_true(sys_now() - t0 < 1.0);
 }
 
 /* Zero-length and parallel camera vectors. */
@@ -1274,10 +1272,10 @@ static void test_json_many_keys(void **state)
     for (i = 0; i < n; i++)
         len += (size_t)snprintf(text + len, cap - len, "%s\"m%d\": {}", i ? ",\n" : "", i);
     snprintf(text + len, cap - len, ",\n\"m17\": {}}}");
-    t0 = now();
+    t0 = sys_now();
     json_bad(text, "x.json:50002: ", "materials: duplicate key \"m17\"", "first at line 19", NULL);
-    print_message("%d materials, one duplicate: %.1f ms\n", n, (now() - t0) * 1e3);
-    assert_true(now() - t0 < 2.0);
+    print_message("%d materials, one duplicate: %.1f ms\n", n, (sys_now() - t0) * 1e3);
+    assert_true(sys_now() - t0 < 2.0);
     /* the same in an object's own keys */
     json_bad("{\n" JCAM ",\n\"materials\": {\"m\": {}}, \"objects\": [\n"
              "{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1, \"material\": \"m\",\n"
@@ -1344,7 +1342,7 @@ static void test_bad_files(void **state)
     snprintf(path, sizeof path, "build/test-output/huge-XXXXXX");
     fd = mkstemp(path);
     assert_true(fd >= 0);
-    assert_int_equal(ftruncate(fd, (off_t)SCENE_MAX_FILE_BYTES + 1), 0);
+    assert_int_equal(ftruncate(fd, (off_t)CW_MAX_FILE_BYTES + 1), 0);
     close(fd);
     scene_init(&s);
     assert_int_equal(nff_load(path, &s, err, sizeof err), -1);

@@ -34,9 +34,11 @@
 #include "image.h"
 #include "image_diff.h"
 #include "image_read.h"
-#include "pov.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_geom.h"
+#include "scene_load.h"
+#include "scene_pov.h"
 
 #define POV_W 160
 #define POV_H 120

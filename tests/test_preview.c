@@ -32,6 +32,7 @@
 #include "image_diff.h"
 #include "image_read.h"
 #include "scene.h"
+#include "sys.h"
 
 #define BIN "build/clwhitted"
 #define OUT "build/test-output/preview"
@@ -63,7 +64,7 @@ static char *slurp(const char *path)
 {
     char *buf;
     size_t len;
-    if (scene_read_file(path, &buf, &len, err, sizeof err) != 0)
+    if (sys_read_file(path, CW_MAX_FILE_BYTES, 1, "a scene file", &buf, &len, err, sizeof err) != 0)
         fail_msg("%s", err);
     return buf;
 }
@@ -72,7 +73,7 @@ static void print_file(const char *path)
 {
     char *s;
     size_t len;
-    if (scene_read_file(path, &s, &len, err, sizeof err) == 0) {
+    if (sys_read_file(path, CW_MAX_FILE_BYTES, 1, "a scene file", &s, &len, err, sizeof err) == 0) {
         fputs(s, stdout);
         free(s);
     }

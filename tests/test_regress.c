@@ -16,6 +16,7 @@
 #include "image_read.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 
 #define REF_DIR "tests/ref"
 #define OUT_DIR "build/test-output"

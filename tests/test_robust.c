@@ -53,6 +53,7 @@
 #include "render.h"
 #include "render_debug.h"
 #include "scene.h"
+#include "scene_load.h"
 
 #define U_F 5.9604644775390625e-8 /* u = 2^-24 */
 #define KB 8.0                    /* hit/miss decision band, in units of u M (see above) */

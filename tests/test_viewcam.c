@@ -10,6 +10,8 @@
 #include "testutil.h"
 
 #include "scene.h"
+#include "scene_json.h"
+#include "scene_load.h"
 #include "viewcam.h"
 
 #define EPS 1e-4f

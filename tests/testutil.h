@@ -13,6 +13,7 @@
 
 #include "render.h"
 #include "scene.h"
+#include "scene_geom.h"
 
 /* splitmix64: the same random numbers on every machine. */
 static uint64_t tu_rng_state;

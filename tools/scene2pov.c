@@ -6,8 +6,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pov.h"
+#include "config.h"
 #include "scene.h"
+#include "scene_load.h"
+#include "scene_pov.h"
+#include "sys.h"
 
 static void usage(FILE *f)
 {
@@ -64,10 +67,11 @@ int main(int argc, char **argv)
     const char *args[2];
     int nargs = 0;
     char err[2048];
-    char *png = NULL, *tmp = NULL;
+    char *png = NULL;
     char cmd[16384];
     scene s;
-    FILE *f = NULL;
+    sys_tmpfile t = {NULL, -1}; /* OUT.pov while it is written */
+    FILE *f;
 
     for (i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -75,13 +79,13 @@ int main(int argc, char **argv)
             usage(stdout);
             return 0;
         } else if (strcmp(a, "-W") == 0 || strcmp(a, "--width") == 0) {
-            if (parse_int("--width", i + 1 < argc ? argv[++i] : NULL, 1, 65536, &width))
+            if (parse_int("--width", i + 1 < argc ? argv[++i] : NULL, 1, CW_MAX_SIDE, &width))
                 return 2;
         } else if (strcmp(a, "-H") == 0 || strcmp(a, "--height") == 0) {
-            if (parse_int("--height", i + 1 < argc ? argv[++i] : NULL, 1, 65536, &height))
+            if (parse_int("--height", i + 1 < argc ? argv[++i] : NULL, 1, CW_MAX_SIDE, &height))
                 return 2;
         } else if (strcmp(a, "-d") == 0 || strcmp(a, "--depth") == 0) {
-            if (parse_int("--depth", i + 1 < argc ? argv[++i] : NULL, 1, 64, &depth))
+            if (parse_int("--depth", i + 1 < argc ? argv[++i] : NULL, 1, CW_MAX_DEPTH, &depth))
                 return 2;
         } else if (strcmp(a, "--spd") == 0) {
             spd = 1;
@@ -129,39 +133,39 @@ int main(int argc, char **argv)
     }
     /* write beside the target, then rename: never a half-written file */
     png = png_name(args[1]);
-    tmp = malloc(strlen(args[1]) + 5);
-    if (!png || !tmp) {
+    if (!png) {
         fprintf(stderr, "scene2pov: out of memory\n");
         goto out;
     }
-    sprintf(tmp, "%s.tmp", args[1]);
-    f = fopen(tmp, "w");
-    if (!f) {
-        fprintf(stderr, "scene2pov: cannot write %s: %s\n", tmp, strerror(errno));
+    if (sys_tmp_open(&t, args[1], err, sizeof err) != 0) {
+        fprintf(stderr, "scene2pov: %s\n", err);
         goto out;
     }
+    f = fdopen(t.fd, "w");
+    if (!f) {
+        fprintf(stderr, "scene2pov: cannot write %s: %s\n", t.tmp, strerror(errno));
+        goto out;
+    }
+    t.fd = -1; /* f owns it now */
     if (pov_write_scene(&s, f, err, sizeof err) != 0) {
         fprintf(stderr, "scene2pov: %s: %s\n", args[1], err);
         fclose(f);
-        remove(tmp);
         goto out;
     }
     if (fclose(f) != 0) {
-        fprintf(stderr, "scene2pov: cannot write %s: %s\n", tmp, strerror(errno));
-        remove(tmp);
+        fprintf(stderr, "scene2pov: cannot write %s: %s\n", t.tmp, strerror(errno));
         goto out;
     }
-    if (rename(tmp, args[1]) != 0) {
-        fprintf(stderr, "scene2pov: cannot rename %s to %s: %s\n", tmp, args[1], strerror(errno));
-        remove(tmp);
+    if (sys_tmp_commit(&t, args[1], err, sizeof err) != 0) {
+        fprintf(stderr, "scene2pov: %s\n", err);
         goto out;
     }
     pov_command_line(&s, args[1], png, cmd, sizeof cmd);
     printf("%s\n", cmd);
     rc = 0;
 out:
+    sys_tmp_abort(&t); /* nothing left to undo after a commit */
     free(png);
-    free(tmp);
     scene_free(&s);
     return rc;
 }

@@ -15,7 +15,9 @@
 
 #include "scene.h"
 
+#include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef int (*fuzz_parser)(const char *text, size_t len, const char *name, scene *s, char *err,
@@ -79,5 +81,19 @@ static int fuzz_check(fuzz_parser parse, const char *name, const unsigned char *
     scene_free(&s);
     return ok;
 }
+
+/* The libFuzzer entry point of a target: runs the reader `parse` on each input as file
+ * `name` and aborts (a crash to libFuzzer) when the property fails. */
+#define FUZZ_TARGET(target, parse, name)                                                           \
+    int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);                                  \
+    int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)                                   \
+    {                                                                                              \
+        char why[1536];                                                                            \
+        if (fuzz_check(parse, name, data, size, why, sizeof why) != 0) {                           \
+            fprintf(stderr, "%s: %s\n", target, why);                                              \
+            abort();                                                                               \
+        }                                                                                          \
+        return 0;                                                                                  \
+    }
 
 #endif

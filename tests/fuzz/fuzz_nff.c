@@ -1,18 +1,6 @@
-/* libFuzzer target for the NFF reader (host/nff.c): see fuzz_check.h for the property. */
+/* libFuzzer target for the NFF reader (host/scene_nff.c): see fuzz_check.h for the property. */
 #include "fuzz_check.h"
 
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
+#include "scene_nff.h"
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
-    char why[1536];
-    if (fuzz_check(nff_parse, "fuzz.nff", data, size, why, sizeof why) != 0) {
-        fprintf(stderr, "fuzz_nff: %s\n", why);
-        abort();
-    }
-    return 0;
-}
+FUZZ_TARGET("fuzz_nff", nff_parse, "fuzz.nff")

@@ -21,7 +21,7 @@
  *                     nff_angle_deg = angle, d = 1, image size = resolution; hither is read
  *                     and ignored
  */
-#include "scene.h"
+#include "scene_nff.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -29,9 +29,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define NFF_MAX_TOKENS 16        /* tokens kept per line; more are only counted */
-#define NFF_MAX_ABS 1e30         /* larger magnitudes are rejected */
-#define NFF_MAX_VERTS 10000000.0 /* largest vertex count accepted for p / pp */
+#include "config.h"
+#include "scene_geom.h"
+#include "scene_io.h"
+
+#define NFF_MAX_TOKENS 16 /* tokens kept per line; more are only counted */
 
 typedef struct {
     char *cur, *end; /* unread part of the NUL-terminated, writable copy of the text */
@@ -40,9 +42,7 @@ typedef struct {
     int ntok;    /* tokens on the current line (can exceed NFF_MAX_TOKENS) */
     int pending; /* the current line is to be handed out again by next_content() */
     int entities;
-    const char *name; /* for messages */
-    char *err;
-    size_t errlen;
+    const scene_msg *msg; /* where messages go */
     scene *s;
     int material; /* index of the current material, -1 before the first use */
     /* what the current line belongs to, for messages */
@@ -50,26 +50,17 @@ typedef struct {
     long ent_n;      /* vertex count for p / pp, 0 otherwise */
     long ent_line;   /* line of the entity keyword */
     long vertex;     /* 1-based vertex (or cone end) of the current line, 0 on the keyword line */
-    char shown[176]; /* a token made printable for a message (see tok_shown) */
+    char shown[SCENE_SHOWN_LEN]; /* a token made printable for a message (see tok_shown) */
 } nff_reader;
 
-#if defined(__GNUC__)
-static int fail(nff_reader *r, long line, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-#endif
+static int fail(nff_reader *r, long line, const char *fmt, ...) SCENE_PRINTF(3, 4);
 
 static int fail(nff_reader *r, long line, const char *fmt, ...)
 {
     va_list ap;
-    int n;
-    if (!r->err || r->errlen == 0)
-        return -1;
-    n = snprintf(r->err, r->errlen, "%s:%ld: ", r->name, line > 0 ? line : 1);
-    if (n >= 0 && (size_t)n < r->errlen) {
-        va_start(ap, fmt);
-        vsnprintf(r->err + n, r->errlen - (size_t)n, fmt, ap);
-        va_end(ap);
-    }
+    va_start(ap, fmt);
+    scene_vfail(r->msg, line, fmt, ap);
+    va_end(ap);
     return -1;
 }
 
@@ -78,10 +69,10 @@ static int oom(nff_reader *r)
     return fail(r, r->line, "out of memory");
 }
 
-/* Token t for a message: at most 40 bytes, control characters and non-UTF-8 escaped. */
+/* Token t for a message (see scene_shown). */
 static const char *tok_shown(nff_reader *r, const char *t)
 {
-    return scene_printable(t, 40, r->shown, sizeof r->shown);
+    return scene_shown(t, r->shown);
 }
 
 static int is_blank(char c)
@@ -150,7 +141,7 @@ static void context(const nff_reader *r, char *buf, size_t len)
                  r->ent, r->ent_line);
 }
 
-/* Converts token i: a finite number of magnitude at most 1e30, the whole token. */
+/* Converts token i: a finite number of magnitude at most CW_MAX_ABS, the whole token. */
 static int number(nff_reader *r, int i, double *out)
 {
     const char *t = r->tok[i];
@@ -161,10 +152,11 @@ static int number(nff_reader *r, int i, double *out)
         context(r, ctx, sizeof ctx);
         return fail(r, r->line, "expected a number %s, found '%s'", ctx, tok_shown(r, t));
     }
-    if (!isfinite(x) || fabs(x) > NFF_MAX_ABS) {
+    if (!isfinite(x) || fabs(x) > CW_MAX_ABS) {
         context(r, ctx, sizeof ctx);
         return fail(r, r->line, "number '%s' %s is %s", tok_shown(r, t), ctx,
-                    isfinite(x) ? "out of range (magnitude above 1e30)" : "not finite");
+                    isfinite(x) ? "out of range (magnitude above " SCENE_STR(CW_MAX_ABS) ")"
+                                : "not finite");
     }
     *out = x;
     return 0;
@@ -274,8 +266,8 @@ static int parse_view(nff_reader *r)
         begin(r, keys[k], 0);
         if (numbers(r, 1, counts[k], val[k], fields[k]) != 0)
             return -1;
-        if (k == 5 && (integer(r, 1, 1, 65536, "'resolution' width", &w) != 0 ||
-                       integer(r, 2, 1, 65536, "'resolution' height", &h) != 0))
+        if (k == 5 && (integer(r, 1, 1, CW_MAX_SIDE, "'resolution' width", &w) != 0 ||
+                       integer(r, 2, 1, CW_MAX_SIDE, "'resolution' height", &h) != 0))
             return -1;
     }
     for (k = 0; k < 6; k++) {
@@ -295,7 +287,7 @@ static int parse_view(nff_reader *r)
         return fail(r, seen[3],
                     "'angle' must lie strictly between 0 and 180 degrees, found %.10g%s", val[3][0],
                     scene_single_note(val[3][0], note, sizeof note));
-    if ((long long)w * h > SCENE_MAX_PIXELS)
+    if ((long long)w * h > CW_MAX_PIXELS)
         return fail(r, seen[5], "'resolution' %ldx%ld has more than 2^28 pixels", w, h);
     from = v3(val[0]);
     at = v3(val[1]);
@@ -319,58 +311,6 @@ static int parse_view(nff_reader *r)
     return 0;
 }
 
-/* The area of a polygon read vertex by vertex: Newell's normal (as scene_newell sums it)
- * and the bounding box. */
-typedef struct {
-    double n[3], lo[3], hi[3];
-    vec3f first, prev;
-    long count;
-} area_sum;
-
-static void area_edge(area_sum *a, vec3f p, vec3f q)
-{
-    a->n[0] += ((double)p.y - q.y) * ((double)p.z + q.z);
-    a->n[1] += ((double)p.z - q.z) * ((double)p.x + q.x);
-    a->n[2] += ((double)p.x - q.x) * ((double)p.y + q.y);
-}
-
-static void area_add(area_sum *a, vec3f q)
-{
-    double c[3];
-    int k;
-    c[0] = q.x;
-    c[1] = q.y;
-    c[2] = q.z;
-    if (a->count == 0) {
-        memset(a, 0, sizeof *a);
-        a->first = q;
-        for (k = 0; k < 3; k++)
-            a->lo[k] = a->hi[k] = c[k];
-    } else {
-        area_edge(a, a->prev, q);
-    }
-    for (k = 0; k < 3; k++) {
-        if (c[k] < a->lo[k])
-            a->lo[k] = c[k];
-        if (c[k] > a->hi[k])
-            a->hi[k] = c[k];
-    }
-    a->prev = q;
-    a->count++;
-}
-
-/* 1 when the polygon has no area (relative to its size; as the JSON reader decides). */
-static int area_is_zero(area_sum *a)
-{
-    double len, size2 = 0;
-    int k;
-    area_edge(a, a->prev, a->first);
-    len = sqrt(a->n[0] * a->n[0] + a->n[1] * a->n[1] + a->n[2] * a->n[2]);
-    for (k = 0; k < 3; k++)
-        size2 += (a->hi[k] - a->lo[k]) * (a->hi[k] - a->lo[k]);
-    return !(len > 1e-12 * size2) || !isfinite(len);
-}
-
 /* p n / pp n and their vertex lines. */
 static int parse_polygon(nff_reader *r, int patch)
 {
@@ -382,7 +322,7 @@ static int parse_polygon(nff_reader *r, int patch)
     scene_triangle tri;
     scene_array *verts = &r->s->poly_verts;
     size_t first = verts->count;
-    area_sum area;
+    scene_area area; /* the vertices are not kept together: added one by one */
 
     if (r->ntok != 2)
         return fail(r, r->line, "expected the vertex count after '%s' (%s n), found %d values", kw,
@@ -393,7 +333,7 @@ static int parse_polygon(nff_reader *r, int patch)
     if (d[0] < 3)
         return fail(r, r->line, "'%s' needs at least 3 vertices, found %s", kw,
                     tok_shown(r, r->tok[1]));
-    if (integer(r, 1, 3, NFF_MAX_VERTS, patch ? "the 'pp' vertex count" : "the 'p' vertex count",
+    if (integer(r, 1, 3, CW_MAX_VERTS, patch ? "the 'pp' vertex count" : "the 'p' vertex count",
                 &n) != 0)
         return -1;
     if ((mat = current_material(r)) < 0)
@@ -402,7 +342,7 @@ static int parse_polygon(nff_reader *r, int patch)
     memset(&tri, 0, sizeof tri);
     tri.material = mat;
     tri.has_normals = patch;
-    area.count = 0;
+    scene_area_init(&area);
     for (i = 0; i < n; i++) {
         vec3f q, qn = vec3f_make(0, 0, 0);
         if (!next_content(r))
@@ -414,7 +354,7 @@ static int parse_polygon(nff_reader *r, int patch)
         if (numbers(r, 0, patch ? 6 : 3, d, patch ? "x y z nx ny nz" : "x y z") != 0)
             return -1;
         q = v3(d);
-        area_add(&area, q);
+        scene_area_add(&area, q);
         if (patch && vec3f_normalize(v3(d + 3), &qn) != 0)
             return fail(r, r->line, "zero normal for vertex %ld of 'pp %ld' (line %ld)", i + 1, n,
                         r->ent_line);
@@ -440,7 +380,7 @@ static int parse_polygon(nff_reader *r, int patch)
                 return -1;
         }
     }
-    if (area_is_zero(&area))
+    if (scene_area_zero(&area))
         return fail(r, r->ent_line,
                     "'%s %ld' has zero area: its vertices are collinear or coincide (the polygon "
                     "ends at line %ld)",
@@ -535,10 +475,10 @@ static int parse_entity(nff_reader *r, long *v_line)
         if (numbers(r, 1, 8, d, "r g b Kd Ks Shine T ior") != 0)
             return -1;
         for (i = 0; i < 3; i++)
-            if (fabs(d[3] * d[i]) > NFF_MAX_ABS)
+            if (fabs(d[3] * d[i]) > CW_MAX_ABS)
                 return fail(r, r->line,
-                            "the diffuse colour Kd * (r g b) = %g is out of range (magnitude above "
-                            "1e30)",
+                            "the diffuse colour Kd * (r g b) = %g is out of range (magnitude "
+                            "above " SCENE_STR(CW_MAX_ABS) ")",
                             d[3] * d[i]);
         m.kd = vec3f_make((float)(d[3] * d[0]), (float)(d[3] * d[1]), (float)(d[3] * d[2]));
         m.ka = m.kd;
@@ -582,34 +522,19 @@ static int parse_entity(nff_reader *r, long *v_line)
     }
 }
 
-/* Parses buf[0..len), which must be writable and have buf[len] == '\0'. */
-static int parse_buffer(char *buf, size_t len, const char *name, scene *s, char *err, size_t errlen)
+/* A scene_text_parser: parses buf[0..len). */
+static int parse_buffer(char *buf, size_t len, const scene_msg *m, scene *s)
 {
     nff_reader r;
     long v_line = 0;
     size_t i, nl;
     memset(&r, 0, sizeof r);
-    r.cur = buf;
+    r.cur = buf + scene_bom_len(buf, len); /* after a UTF-8 byte order mark */
     r.end = buf + len;
-    r.name = name;
-    r.err = err;
-    r.errlen = errlen;
+    r.msg = m;
     r.s = s;
     r.material = -1;
 
-    if (scene_set_name(s, name) != 0)
-        return fail(&r, 1, "out of memory");
-    {
-        const char *nul = memchr(buf, '\0', len);
-        if (nul) {
-            long line = 1;
-            for (i = 0; i < (size_t)(nul - buf); i++)
-                line += buf[i] == '\n';
-            return fail(&r, line, "unexpected NUL byte (not a text file?)");
-        }
-    }
-    if (len >= 3 && memcmp(buf, "\xEF\xBB\xBF", 3) == 0)
-        r.cur += 3; /* a UTF-8 byte order mark */
     while (next_content(&r))
         if (parse_entity(&r, &v_line) != 0)
             return -1;

@@ -2,7 +2,7 @@
  * the clwhitted shading model, so that POV-Ray can serve as an independent reference.
  *
  * What the written file relies on (each checked against POV-Ray 3.7.0 renders and its
- * source, see the comments in pov.c):
+ * source, see the comments in scene_pov.c):
  *   - camera rays through pixel centres, top row first: explicit right/up/direction
  *     vectors reproduce the window exactly, for all three projections (oblique is an
  *     orthographic camera whose direction is not perpendicular to right and up);
@@ -16,16 +16,18 @@
  * output, e.g. (pov_command_line() writes this line for a given file):
  *   povray +Iscene.pov +Oscene.png +W160 +H120 -D -A +Q9 +FN16 File_Gamma=1.0
  * and read the PNG without sRGB decoding. Values above 1 clip in the PNG. */
-#ifndef CW_POV_H
-#define CW_POV_H
+#ifndef CW_SCENE_POV_H
+#define CW_SCENE_POV_H
 
 #include <stddef.h>
 #include <stdio.h>
 
 #include "scene.h"
 
-/* Writes the finished scene (see scene_finish) to f. Cones and transmission are left
- * out, as the renderer does not draw them (a comment in the file says so).
+/* Writes the finished scene (see scene_finish) to f: every sphere, triangle, polygon and
+ * (open) cone, except triangles and polygons without area, which the renderer leaves out
+ * as well (a comment in the file counts them). Transmission is written as POV-Ray's
+ * transmit and interior ior, whose model differs (see write_simple in scene_pov.c).
  * Returns 0, or -1 with a message in err (invalid material index, non-finite values,
  * a write error). */
 int pov_write_scene(const scene *s, FILE *f, char *err, size_t errlen);

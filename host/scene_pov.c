@@ -40,11 +40,13 @@
  *   the renderer's plane (Newell normal through the vertex average) along the plane's
  *   dominant axis, which keeps the renderer's inside test (it drops that axis) exact.
  */
-#include "pov.h"
+#include "scene_pov.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+
+#include "scene_geom.h"
 
 /* transmit of the upper layers of a layered material (see write_layered) */
 #define POV_LAYER_T 0.5
@@ -303,7 +305,7 @@ static void write_triangles(FILE *f, const scene *s, size_t *skipped)
     while (i < n) {
         int mat = SCENE_AT(s->triangles, scene_triangle, i).material;
         size_t j, end = i;
-        int any = 0;
+        int any = 0, k;
         while (end < n && SCENE_AT(s->triangles, scene_triangle, end).material == mat)
             end++;
         for (j = i; j < end; j++) {
@@ -315,26 +317,16 @@ static void write_triangles(FILE *f, const scene *s, size_t *skipped)
             if (!any)
                 fprintf(f, "mesh {\n");
             any = 1;
-            if (t->has_normals) {
-                fprintf(f, "  smooth_triangle { ");
-                put3(f, t->p[0]);
-                fprintf(f, ", ");
-                put3(f, t->n[0]);
-                fprintf(f, ", ");
-                put3(f, t->p[1]);
-                fprintf(f, ", ");
-                put3(f, t->n[1]);
-                fprintf(f, ", ");
-                put3(f, t->p[2]);
-                fprintf(f, ", ");
-                put3(f, t->n[2]);
-            } else {
-                fprintf(f, "  triangle { ");
-                put3(f, t->p[0]);
-                fprintf(f, ", ");
-                put3(f, t->p[1]);
-                fprintf(f, ", ");
-                put3(f, t->p[2]);
+            /* triangle { p0, p1, p2 } or smooth_triangle { p0, n0, p1, n1, p2, n2 } */
+            fprintf(f, "  %s { ", t->has_normals ? "smooth_triangle" : "triangle");
+            for (k = 0; k < 3; k++) {
+                if (k > 0)
+                    fprintf(f, ", ");
+                put3(f, t->p[k]);
+                if (t->has_normals) {
+                    fprintf(f, ", ");
+                    put3(f, t->n[k]);
+                }
             }
             fprintf(f, " }\n");
         }
@@ -429,9 +421,8 @@ int pov_write_scene(const scene *s, FILE *f, char *err, size_t errlen)
         fprintf(f, "\n");
     }
     if (any_kt)
-        fprintf(
-            f,
-            "// transmission: POV-Ray's transmit + interior ior (see write_simple in pov.c)\n\n");
+        fprintf(f, "// transmission: POV-Ray's transmit + interior ior (see write_simple in "
+                   "scene_pov.c)\n\n");
 
     for (i = 0; i < s->spheres.count; i++) {
         const scene_sphere *sp = &SCENE_AT(s->spheres, scene_sphere, i);

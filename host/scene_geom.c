@@ -1,0 +1,177 @@
+/* Geometry on the scene model: vectors, polygon normals and planes, the zero-area rule,
+ * degenerate triangles, the camera basis. See scene_geom.h. */
+#include "scene_geom.h"
+
+#include <math.h>
+#include <string.h>
+
+/* The zero-area rule's threshold, relative to the squared size of the polygon. */
+#define SCENE_ZERO_AREA 1e-12
+
+vec3f vec3f_make(float x, float y, float z)
+{
+    vec3f v;
+    v.x = x;
+    v.y = y;
+    v.z = z;
+    return v;
+}
+
+vec3f vec3f_sub(vec3f a, vec3f b)
+{
+    return vec3f_make(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+
+vec3f vec3f_cross(vec3f a, vec3f b)
+{
+    return vec3f_make(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+float vec3f_dot(vec3f a, vec3f b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+float vec3f_length(vec3f a)
+{
+    return (float)sqrt((double)a.x * a.x + (double)a.y * a.y + (double)a.z * a.z);
+}
+
+int vec3f_normalize(vec3f a, vec3f *out)
+{
+    double len = sqrt((double)a.x * a.x + (double)a.y * a.y + (double)a.z * a.z);
+    if (!(len > 0.0) || !isfinite(len))
+        return -1;
+    *out = vec3f_make((float)(a.x / len), (float)(a.y / len), (float)(a.z / len));
+    return 0;
+}
+
+/* Adds the edge a -> b to Newell's sums. */
+static void newell_edge(double n[3], vec3f a, vec3f b)
+{
+    n[0] += ((double)a.y - b.y) * ((double)a.z + b.z);
+    n[1] += ((double)a.z - b.z) * ((double)a.x + b.x);
+    n[2] += ((double)a.x - b.x) * ((double)a.y + b.y);
+}
+
+static double length3(const double n[3])
+{
+    return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+void scene_newell(const vec3f *v, int n, double out[3])
+{
+    int i;
+    out[0] = out[1] = out[2] = 0.0;
+    for (i = 0; i < n; i++)
+        newell_edge(out, v[i], v[(i + 1) % n]);
+}
+
+int scene_polygon_plane(const vec3f *v, int n, double normal[3], double *offset, int *axis)
+{
+    double len;
+    int i;
+    scene_newell(v, n, normal);
+    len = length3(normal);
+    if (!(len > 0.0) || !isfinite(len))
+        return -1;
+    for (i = 0; i < 3; i++)
+        normal[i] /= len;
+    *offset = 0.0;
+    for (i = 0; i < n; i++)
+        *offset += normal[0] * v[i].x + normal[1] * v[i].y + normal[2] * v[i].z;
+    *offset /= n;
+    *axis = fabs(normal[0]) > fabs(normal[1]) ? (fabs(normal[0]) > fabs(normal[2]) ? 0 : 2)
+                                              : (fabs(normal[1]) > fabs(normal[2]) ? 1 : 2);
+    return 0;
+}
+
+void scene_area_init(scene_area *a)
+{
+    memset(a, 0, sizeof *a);
+}
+
+void scene_area_add(scene_area *a, vec3f v)
+{
+    double c[3];
+    int k;
+    c[0] = v.x;
+    c[1] = v.y;
+    c[2] = v.z;
+    if (a->count == 0) {
+        scene_area_init(a);
+        a->first = v;
+        for (k = 0; k < 3; k++)
+            a->lo[k] = a->hi[k] = c[k];
+    } else {
+        newell_edge(a->normal, a->prev, v);
+    }
+    for (k = 0; k < 3; k++) {
+        if (c[k] < a->lo[k])
+            a->lo[k] = c[k];
+        if (c[k] > a->hi[k])
+            a->hi[k] = c[k];
+    }
+    a->prev = v;
+    a->count++;
+}
+
+double scene_area_size(const scene_area *a)
+{
+    double d[3];
+    int k;
+    for (k = 0; k < 3; k++)
+        d[k] = a->hi[k] - a->lo[k];
+    return length3(d);
+}
+
+int scene_area_zero(scene_area *a)
+{
+    double size2 = 0;
+    int k;
+    if (a->count == 0)
+        return 1;
+    newell_edge(a->normal, a->prev, a->first);
+    a->len = length3(a->normal);
+    for (k = 0; k < 3; k++)
+        size2 += (a->hi[k] - a->lo[k]) * (a->hi[k] - a->lo[k]);
+    return !(a->len > SCENE_ZERO_AREA * size2) || !isfinite(a->len);
+}
+
+int scene_polygon_zero_area(const vec3f *v, int n)
+{
+    scene_area a;
+    int i;
+    scene_area_init(&a);
+    for (i = 0; i < n; i++)
+        scene_area_add(&a, v[i]);
+    return scene_area_zero(&a);
+}
+
+int scene_triangle_degenerate(const scene_triangle *t)
+{
+    float e1x = t->p[1].x - t->p[0].x, e1y = t->p[1].y - t->p[0].y, e1z = t->p[1].z - t->p[0].z;
+    float e2x = t->p[2].x - t->p[0].x, e2y = t->p[2].y - t->p[0].y, e2z = t->p[2].z - t->p[0].z;
+    float cx = e1y * e2z - e1z * e2y, cy = e1z * e2x - e1x * e2z, cz = e1x * e2y - e1y * e2x;
+    return cx == 0.0f && cy == 0.0f && cz == 0.0f;
+}
+
+int scene_camera_basis(scene_camera *c, vec3f view, vec3f up)
+{
+    vec3f w, u;
+    if (vec3f_normalize(vec3f_make(-view.x, -view.y, -view.z), &w) != 0)
+        return -1;
+    /* up parallel to the view: the cross product vanishes (relative to the sizes) */
+    {
+        vec3f x = vec3f_cross(up, w);
+        float ul = vec3f_length(up);
+        if (!(ul > 0.0f) || !(vec3f_length(x) > 1e-6f * ul))
+            return -1;
+        if (vec3f_normalize(x, &u) != 0)
+            return -1;
+    }
+    c->w = w;
+    c->u = u;
+    c->v = vec3f_cross(w, u);
+    return 0;
+}

@@ -1,0 +1,16 @@
+/* The reader of clwhitted's own scene format, JSON (the schema is described in
+ * scene_json.c). */
+#ifndef CW_SCENE_JSON_H
+#define CW_SCENE_JSON_H
+
+#include <stddef.h>
+
+#include "scene.h"
+
+/* json_scene_load reads a file; json_scene_parse reads text in memory, naming it `name` in
+ * errors. Both return 0, or -1 with "name:line: message" in err. */
+int json_scene_load(const char *path, scene *s, char *err, size_t errlen);
+int json_scene_parse(const char *text, size_t len, const char *name, scene *s, char *err,
+                     size_t errlen);
+
+#endif

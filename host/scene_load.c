@@ -1,0 +1,18 @@
+/* Loading a scene file: picks the reader by the extension. See scene_load.h. */
+#include "scene_load.h"
+
+#include <stdio.h>
+
+#include "scene_json.h"
+#include "scene_nff.h"
+#include "sys.h"
+
+int scene_load(const char *path, scene *s, char *err, size_t errlen)
+{
+    if (sys_has_ext(path, ".json"))
+        return json_scene_load(path, s, err, errlen);
+    if (sys_has_ext(path, ".nff"))
+        return nff_load(path, s, err, errlen);
+    snprintf(err, errlen, "%s: unknown scene format (expected a .nff or .json file)", path);
+    return -1;
+}
