@@ -59,7 +59,7 @@ typedef struct {
     long restart_firsts;
     double frame_s, last_batch_s, mrays;
     double title_time, title_trace_s;
-    unsigned long long rays_total, title_rays;
+    unsigned long long title_rays;
 } pv_stats;
 
 /* The test script and what it waits for. */
@@ -167,7 +167,6 @@ static void count_batch(pv *p, int rows, double dt, unsigned long long rays)
 {
     pv_stats *st = &p->stats;
     double c = dt / ((double)p->sched.nx * rows);
-    st->rays_total += rays;
     st->title_rays += rays;
     st->title_trace_s += dt;
     p->sched.cost = p->sched.cost > 0.0 ? 0.5 * p->sched.cost + 0.5 * c : c;
