@@ -1,6 +1,6 @@
 /* The preview's interactive camera: orbit, pan, zoom, fly, reset, projection toggle and
  * resize (square pixels), as plain math on scene_camera. Needs no display: the preview
- * (host/preview.c) maps input to these calls, tests/test_viewcam.c checks them. */
+ * (host/preview_input.c) maps input to these calls, tests/test_viewcam.c checks them. */
 #ifndef CW_VIEWCAM_H
 #define CW_VIEWCAM_H
 
