@@ -1,9 +1,10 @@
 /* What differs between OpenCL C 1.2 and host C99, and nothing else: the address-space
  * and inline keywords (CW_GLOBAL, CW_INLINE), the vector types (cw_float4, vec3, v4), the
  * math functions (cw_sqrt ...), the atomics and the contraction pragma. The kernel
- * headers use only these, so that they compile both as OpenCL C (the kernels) and as host
- * C99 (host code and tests); their vector arithmetic is in vecmath.h. Only the entry
- * kernels (clwhitted.cl), which the host never compiles, use OpenCL keywords directly. */
+ * headers are written with these so that they compile both as OpenCL C (the kernels) and
+ * as host C99 (host code and tests). OpenCL C appears elsewhere only in the OpenCL branch
+ * of vecmath.h (vector operators and built-ins) and in the entry kernels of clwhitted.cl
+ * (__kernel, __global, work-item functions), which the host never compiles. */
 #ifndef CW_COMPAT_H
 #define CW_COMPAT_H
 

@@ -2,6 +2,7 @@
 #ifndef CW_CONE_H
 #define CW_CONE_H
 
+#include "flags.h"
 #include "isect.h"
 #include "surface.h"
 #include "types.h"

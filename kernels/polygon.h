@@ -3,6 +3,7 @@
 #ifndef CW_POLYGON_H
 #define CW_POLYGON_H
 
+#include "flags.h"
 #include "isect.h"
 #include "surface.h"
 #include "types.h"

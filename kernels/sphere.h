@@ -2,6 +2,7 @@
 #ifndef CW_SPHERE_H
 #define CW_SPHERE_H
 
+#include "flags.h"
 #include "isect.h"
 #include "surface.h"
 #include "types.h"

@@ -3,6 +3,7 @@
 #ifndef CW_TRIANGLE_H
 #define CW_TRIANGLE_H
 
+#include "flags.h"
 #include "isect.h"
 #include "surface.h"
 #include "types.h"

@@ -7,7 +7,8 @@
 #include "compat.h"
 
 /* primitive kinds, as stored in cw_hit.kind and in the low two bits of a primitive
- * reference (ref = index * 4 + kind - 1) */
+ * reference (ref = index * 4 + kind - 1; a fifth kind needs a third bit). Each kind's
+ * intersection and surface code is in its own header (sphere.h ...), dispatched by prim.h. */
 #define CW_PRIM_NONE 0
 #define CW_PRIM_SPHERE 1
 #define CW_PRIM_TRIANGLE 2
