@@ -2,7 +2,8 @@
  * (cw_bvh4_node), built on the host as a binary SAH tree (host/bvh.c) and collapsed so
  * that one 4-wide box test covers up to four children; the primitives of a leaf are
  * tested through prim_intersect (prim.h). The traversal stack holds CW_BVH_STACK entries;
- * the host checks that its tree never needs more. */
+ * the host checks that its tree never needs more. (The host's builder, host/bvh.h, shares
+ * the bvh_ prefix: no function name is in both.) */
 #ifndef CW_TRAVERSE_H
 #define CW_TRAVERSE_H
 
