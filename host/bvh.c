@@ -19,6 +19,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "box.h"
+
 #define MAX_BINS 16 /* per axis; a node of fewer primitives gets as many bins as it has */
 #define C_TRAV 1.0
 #define C_ISECT 1.0
@@ -46,32 +48,6 @@ typedef struct {
 } task;
 
 _Static_assert(sizeof(prim) == 32, "prim is 32 bytes");
-
-static void box_empty(float lo[3], float hi[3])
-{
-    for (int a = 0; a < 3; a++) {
-        lo[a] = INFINITY;
-        hi[a] = -INFINITY;
-    }
-}
-
-/* Grows a box; NaN coordinates are ignored (the comparison is false). */
-static inline void box_grow(float lo[3], float hi[3], const float plo[3], const float phi[3])
-{
-    for (int a = 0; a < 3; a++) {
-        lo[a] = plo[a] < lo[a] ? plo[a] : lo[a];
-        hi[a] = phi[a] > hi[a] ? phi[a] : hi[a];
-    }
-}
-
-/* Surface area; 0 for an empty box. */
-static double box_area(const float lo[3], const float hi[3])
-{
-    double dx = (double)hi[0] - lo[0], dy = (double)hi[1] - lo[1], dz = (double)hi[2] - lo[2];
-    if (!(dx >= 0.0 && dy >= 0.0 && dz >= 0.0))
-        return 0.0;
-    return 2.0 * (dx * dy + dy * dz + dz * dx);
-}
 
 /* Bin of a doubled centroid: NaN goes to bin 0, out-of-range values to the end bins. */
 static inline int bin_of(float c, float cmin, float scale, float last)
@@ -406,15 +382,6 @@ double bvh_sah_cost(const bvh *b)
 
 /* ---- the 4-wide tree ------------------------------------------------------------------ */
 
-static double node_area(const cw_bvh_node *n)
-{
-    double dx = (double)n->hi[0] - n->lo[0], dy = (double)n->hi[1] - n->lo[1],
-           dz = (double)n->hi[2] - n->lo[2];
-    if (!(dx >= 0) || !(dy >= 0) || !(dz >= 0))
-        return 0;
-    return dx * dy + dy * dz + dz * dx;
-}
-
 static void f4_set(cw_float4 *v, int i, float x)
 {
     if (i == 0)
@@ -454,9 +421,10 @@ static int collapse(const cw_bvh_node *n2, int i2, bvh4 *out, int *need)
             int best = -1;
             double best_area = -1;
             for (i = 0; i < ns; i++)
-                if (n2[slots[i]].count <= 0 && node_area(&n2[slots[i]]) > best_area) {
+                if (n2[slots[i]].count <= 0 &&
+                    box_area(n2[slots[i]].lo, n2[slots[i]].hi) > best_area) {
                     best = i;
-                    best_area = node_area(&n2[slots[i]]);
+                    best_area = box_area(n2[slots[i]].lo, n2[slots[i]].hi);
                 }
             if (best < 0)
                 break;

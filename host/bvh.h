@@ -1,6 +1,6 @@
 /* The bounding volume hierarchy: a binned surface-area-heuristic (SAH) builder over
- * axis-aligned boxes, flattened depth-first into cw_bvh_node (kernels/types.h) for the
- * kernels. */
+ * axis-aligned boxes, flattened depth-first into cw_bvh_node, and its collapse into the
+ * 4-wide tree the kernels traverse (cw_bvh4_node, kernels/types.h). */
 #ifndef CW_BVH_H
 #define CW_BVH_H
 
@@ -20,6 +20,16 @@
 typedef struct {
     float lo[3], hi[3];
 } bvh_box;
+
+/* One node of the flattened binary tree (depth-first order: an interior node's first
+ * child is the next node). */
+typedef struct {
+    float lo[3];
+    int start; /* leaf: first entry in the primitive-reference array;
+                * interior: index of the second child */
+    float hi[3];
+    int count; /* leaf: number of primitives (> 0); interior: -(split axis) (0, -1, -2) */
+} cw_bvh_node;
 
 typedef struct {
     cw_bvh_node *nodes; /* depth-first: an interior node's first child is the next node */

@@ -8,7 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "intersect.h"
+#include "box.h"
+#include "polygon.h"
 #include "scene_geom.h"
 
 cw_float4 devscene_f4(vec3f v, float w)
@@ -52,52 +53,12 @@ void devscene_free(devscene *ds)
     bvh4_free(&ds->tree4);
 }
 
-static void box_empty(bvh_box *b)
-{
-    int k;
-    for (k = 0; k < 3; k++) {
-        b->lo[k] = INFINITY;
-        b->hi[k] = -INFINITY;
-    }
-}
-
-static void box_add(bvh_box *b, float x, float y, float z)
-{
-    b->lo[0] = fminf(b->lo[0], x);
-    b->lo[1] = fminf(b->lo[1], y);
-    b->lo[2] = fminf(b->lo[2], z);
-    b->hi[0] = fmaxf(b->hi[0], x);
-    b->hi[1] = fmaxf(b->hi[1], y);
-    b->hi[2] = fmaxf(b->hi[2], z);
-}
-
-/* Box of a disc of radius rad around c, perpendicular to the unit axis a. */
-static void box_add_disc(bvh_box *b, const float c[3], const float a[3], float rad)
-{
-    float e[3];
-    int k;
-    for (k = 0; k < 3; k++)
-        e[k] = rad * sqrtf(fmaxf(0.0f, 1.0f - a[k] * a[k]));
-    box_add(b, c[0] - e[0], c[1] - e[1], c[2] - e[2]);
-    box_add(b, c[0] + e[0], c[1] + e[1], c[2] + e[2]);
-}
-
-/* Widens a box by a relative margin, so that rounding in the kernels' intersection
- * tests never puts a hit just outside its box. */
-static void box_pad(bvh_box *b)
-{
-    int k;
-    for (k = 0; k < 3; k++) {
-        float m = 1e-6f * fmaxf(fabsf(b->lo[k]), fabsf(b->hi[k]));
-        b->lo[k] -= m;
-        b->hi[k] += m;
-    }
-}
-
+/* Adds the box of primitive ref, widened by a relative margin so that rounding in the
+ * kernels' intersection tests never puts a hit just outside its box. */
 static int push_box(devscene *ds, const bvh_box *b, int ref)
 {
     bvh_box bb = *b;
-    box_pad(&bb);
+    box_widen(bb.lo, bb.hi, 1e-6f);
     ds->boxes[ds->nbox] = bb;
     ds->box_ref[ds->nbox] = ref;
     ds->nbox++;
@@ -233,9 +194,9 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
             continue; /* no surface */
         ds->sph[ds->nsph].center = devscene_f4(ss->center, rad);
         ds->sph[ds->nsph].material = ss->material;
-        box_empty(&b);
-        box_add(&b, ss->center.x - rad, ss->center.y - rad, ss->center.z - rad);
-        box_add(&b, ss->center.x + rad, ss->center.y + rad, ss->center.z + rad);
+        box_empty(b.lo, b.hi);
+        box_add_point(b.lo, b.hi, ss->center.x - rad, ss->center.y - rad, ss->center.z - rad);
+        box_add_point(b.lo, b.hi, ss->center.x + rad, ss->center.y + rad, ss->center.z + rad);
         push_box(ds, &b, CW_REF(CW_PRIM_SPHERE, ds->nsph));
         ds->nsph++;
     }
@@ -245,7 +206,7 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
             continue; /* no area, no normal */
         cw_triangle *t = &ds->tri[ds->ntri];
         bvh_box b;
-        box_empty(&b);
+        box_empty(b.lo, b.hi);
         t->p0 = devscene_f4(st->p[0], 0);
         t->p1 = devscene_f4(st->p[1], 0);
         t->p2 = devscene_f4(st->p[2], 0);
@@ -257,7 +218,7 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
                 ds->normals[ds->nnorm++] = devscene_f4(st->n[k], 0);
         }
         for (k = 0; k < 3; k++)
-            box_add(&b, st->p[k].x, st->p[k].y, st->p[k].z);
+            box_add_point(b.lo, b.hi, st->p[k].x, st->p[k].y, st->p[k].z);
         push_box(ds, &b, CW_REF(CW_PRIM_TRIANGLE, ds->ntri));
         ds->ntri++;
     }
@@ -291,9 +252,9 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
             snprintf(err, errlen, "out of memory for polygon edge bands");
             return -1;
         }
-        box_empty(&b);
+        box_empty(b.lo, b.hi);
         for (j = 0; j < sp->count; j++)
-            box_add(&b, v[j].x, v[j].y, v[j].z);
+            box_add_point(b.lo, b.hi, v[j].x, v[j].y, v[j].z);
         push_box(ds, &b, CW_REF(CW_PRIM_POLYGON, ds->npg));
         ds->npg++;
     }
@@ -325,9 +286,9 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
         c1[0] = sc->apex.x;
         c1[1] = sc->apex.y;
         c1[2] = sc->apex.z;
-        box_empty(&b);
-        box_add_disc(&b, c0, a, r0);
-        box_add_disc(&b, c1, a, r1);
+        box_empty(b.lo, b.hi);
+        box_add_disc(b.lo, b.hi, c0, a, r0);
+        box_add_disc(b.lo, b.hi, c1, a, r1);
         push_box(ds, &b, CW_REF(CW_PRIM_CONE, ds->ncone));
         ds->ncone++;
     }

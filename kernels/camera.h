@@ -3,6 +3,7 @@
 #define CW_CAMERA_H
 
 #include "types.h"
+#include "vecmath.h"
 
 /* The eye ray through the point (i + sx, j + sy) of pixel (i, j), j counted from the
  * bottom row; (sx, sy) = (0.5, 0.5) is the pixel centre of Shirley & Marschner:

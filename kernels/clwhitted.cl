@@ -2,21 +2,13 @@
  * Wavefront: raygen fills the ray queue; per level, intersect finds each queued ray's
  * closest hit, shade adds ambient/background to the pixel and appends shadow rays and
  * the next level's rays, and occlude adds each unblocked shadow ray's light. */
-#include "bvh.h"
 #include "camera.h"
-#include "intersect.h"
+#include "flags.h"
+#include "isect.h"
 #include "shade.h"
+#include "traverse.h"
 #include "types.h"
 #include "world.h"
-
-#if (CW_HAS_SPHERES | CW_HAS_TRIANGLES | CW_HAS_POLYGONS | CW_HAS_CONES | CW_HAS_MIRRORS |         \
-     CW_HAS_REFRACTION | CW_FAST | CW_STATS) &                                                     \
-    ~1
-#error "feature flags CW_HAS_*, CW_FAST and CW_STATS must be 0 or 1"
-#endif
-#if !CW_FAST && defined(__FAST_RELAXED_MATH__)
-#error "the robust path (CW_FAST=0) must not be built with -cl-fast-relaxed-math"
-#endif
 
 /* 2-D launch over a band of rows: x = column, y = row within the band (image row 0 at
  * the top). Ray k of the band is pixel (x, row0 + y); the pixel's sample count (.w of

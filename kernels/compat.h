@@ -1,6 +1,10 @@
-/* The only place OpenCL keywords appear. The kernel headers include this file, so
- * that they compile both as OpenCL C 1.2 and as host C99 (for host-side use and
- * tests): vectors are used only through the v3_* functions below. */
+/* What differs between OpenCL C 1.2 and host C99, and nothing else: the address-space
+ * and inline keywords (CW_GLOBAL, CW_INLINE), the vector types (cw_float4, vec3, v4), the
+ * math functions (cw_sqrt ...), the atomics and the contraction pragma. The kernel
+ * headers are written with these so that they compile both as OpenCL C (the kernels) and
+ * as host C99 (host code and tests). OpenCL C appears elsewhere only in the OpenCL branch
+ * of vecmath.h (vector operators and built-ins) and in the entry kernels of clwhitted.cl
+ * (__kernel, __global, work-item functions), which the host never compiles. */
 #ifndef CW_COMPAT_H
 #define CW_COMPAT_H
 
@@ -11,78 +15,9 @@
 
 typedef float4 cw_float4;
 typedef float3 vec3;
-
-CW_INLINE vec3 v3(float x, float y, float z)
-{
-    return (float3)(x, y, z);
-}
-CW_INLINE vec3 v3_from4(cw_float4 a)
-{
-    return a.xyz;
-}
-CW_INLINE cw_float4 v4_from3(vec3 a, float w)
-{
-    return (float4)(a, w);
-}
-CW_INLINE vec3 v3_add(vec3 a, vec3 b)
-{
-    return a + b;
-}
-CW_INLINE vec3 v3_sub(vec3 a, vec3 b)
-{
-    return a - b;
-}
-CW_INLINE vec3 v3_mul(vec3 a, vec3 b)
-{
-    return a * b;
-}
-CW_INLINE vec3 v3_scale(vec3 a, float s)
-{
-    return a * s;
-}
-CW_INLINE float v3_dot(vec3 a, vec3 b)
-{
-    return dot(a, b);
-}
-CW_INLINE vec3 v3_cross(vec3 a, vec3 b)
-{
-    return cross(a, b);
-}
-CW_INLINE float v3_len(vec3 a)
-{
-    return length(a);
-}
-CW_INLINE vec3 v3_norm(vec3 a)
-{
-    return normalize(a);
-}
 /* 4-wide: the four lanes of one box test of the 4-wide BVH */
 typedef float4 v4;
-CW_INLINE v4 v4_splat(float a)
-{
-    return (float4)(a);
-}
-CW_INLINE v4 v4_sub(v4 a, v4 b)
-{
-    return a - b;
-}
-CW_INLINE v4 v4_mul(v4 a, v4 b)
-{
-    return a * b;
-}
-/* min and max without fmin/fmax's NaN rules (the box test never sees a NaN) */
-CW_INLINE v4 v4_min(v4 a, v4 b)
-{
-    return a < b ? a : b;
-}
-CW_INLINE v4 v4_max(v4 a, v4 b)
-{
-    return a > b ? a : b;
-}
-CW_INLINE float v4_get(v4 a, int i)
-{
-    return i == 0 ? a.x : (i == 1 ? a.y : (i == 2 ? a.z : a.w));
-}
+
 #define cw_sqrt(x) sqrt(x)
 #define cw_fabs(x) fabs(x)
 #define cw_fmax(a, b) fmax((a), (b))
@@ -132,102 +67,8 @@ typedef struct {
     float x, y, z;
 } vec3;
 
-CW_INLINE vec3 v3(float x, float y, float z)
-{
-    vec3 r;
-    r.x = x;
-    r.y = y;
-    r.z = z;
-    return r;
-}
-CW_INLINE vec3 v3_from4(cw_float4 a)
-{
-    return v3(a.x, a.y, a.z);
-}
-CW_INLINE cw_float4 v4_from3(vec3 a, float w)
-{
-    cw_float4 r;
-    r.x = a.x;
-    r.y = a.y;
-    r.z = a.z;
-    r.w = w;
-    return r;
-}
-CW_INLINE vec3 v3_add(vec3 a, vec3 b)
-{
-    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
-}
-CW_INLINE vec3 v3_sub(vec3 a, vec3 b)
-{
-    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
-}
-CW_INLINE vec3 v3_mul(vec3 a, vec3 b)
-{
-    return v3(a.x * b.x, a.y * b.y, a.z * b.z);
-}
-CW_INLINE vec3 v3_scale(vec3 a, float s)
-{
-    return v3(a.x * s, a.y * s, a.z * s);
-}
-CW_INLINE float v3_dot(vec3 a, vec3 b)
-{
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-CW_INLINE vec3 v3_cross(vec3 a, vec3 b)
-{
-    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-CW_INLINE float v3_len(vec3 a)
-{
-    return sqrtf(v3_dot(a, a));
-}
-CW_INLINE vec3 v3_norm(vec3 a)
-{
-    return v3_scale(a, 1.0f / v3_len(a));
-}
 typedef cw_float4 v4;
-CW_INLINE v4 v4_splat(float a)
-{
-    v4 r;
-    r.x = r.y = r.z = r.w = a;
-    return r;
-}
-CW_INLINE v4 v4_sub(v4 a, v4 b)
-{
-    a.x -= b.x;
-    a.y -= b.y;
-    a.z -= b.z;
-    a.w -= b.w;
-    return a;
-}
-CW_INLINE v4 v4_mul(v4 a, v4 b)
-{
-    a.x *= b.x;
-    a.y *= b.y;
-    a.z *= b.z;
-    a.w *= b.w;
-    return a;
-}
-CW_INLINE v4 v4_min(v4 a, v4 b)
-{
-    a.x = a.x < b.x ? a.x : b.x;
-    a.y = a.y < b.y ? a.y : b.y;
-    a.z = a.z < b.z ? a.z : b.z;
-    a.w = a.w < b.w ? a.w : b.w;
-    return a;
-}
-CW_INLINE v4 v4_max(v4 a, v4 b)
-{
-    a.x = a.x > b.x ? a.x : b.x;
-    a.y = a.y > b.y ? a.y : b.y;
-    a.z = a.z > b.z ? a.z : b.z;
-    a.w = a.w > b.w ? a.w : b.w;
-    return a;
-}
-CW_INLINE float v4_get(v4 a, int i)
-{
-    return i == 0 ? a.x : (i == 1 ? a.y : (i == 2 ? a.z : a.w));
-}
+
 #define cw_sqrt(x) sqrtf(x)
 #define cw_fabs(x) fabsf(x)
 #define cw_fmax(a, b) fmaxf((a), (b))

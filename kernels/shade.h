@@ -5,110 +5,12 @@
 #ifndef CW_SHADE_H
 #define CW_SHADE_H
 
-#include "intersect.h"
+#include "flags.h"
+#include "prim.h"
+#include "surface.h"
 #include "types.h"
-
-#ifndef CW_HAS_MIRRORS
-#define CW_HAS_MIRRORS 1
-#endif
-#ifndef CW_HAS_REFRACTION
-#define CW_HAS_REFRACTION 1
-#endif
-
-/* gamma(n) of Higham (n u / (1 - n u), u = 2^-24), doubled: OpenCL allows a few ulps of
- * error in division and sqrt where IEEE rounds correctly. */
-#define CW_GAMMA(n) ((float)(n)*1.19209304e-7f)
-
-/* Where a ray hit: the point, its unit geometric normal (as the primitive defines it,
- * not turned to the ray), the unit shading normal, and a bound on the point's
- * absolute error per coordinate. */
-typedef struct {
-    vec3 p, ng, ns, err;
-    int flat; /* 1 + reference of the primitive if it is flat (triangle, polygon), else 0 */
-} cw_surface;
-
-CW_INLINE vec3 shade_abs(vec3 a)
-{
-    return v3(cw_fabs(a.x), cw_fabs(a.y), cw_fabs(a.z));
-}
-
-/* The hit point, recomputed from the primitive where that is more accurate than
- * o + t d: from the barycentric coordinates on triangles, and projected back onto
- * spheres, cones and polygon planes (pbrt, 3rd ed., 3.9). */
-CW_INLINE cw_surface shade_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d)
-{
-    cw_surface s;
-    vec3 p = v3_add(o, v3_scale(d, hit.t));
-    s.flat = 0;
-    if (hit.kind == CW_PRIM_SPHERE) {
-        CW_GLOBAL const cw_sphere *sp = &w->spheres[hit.index];
-        vec3 c = v3_from4(sp->center);
-        vec3 n = v3_norm(v3_sub(p, c));
-        s.ng = n;
-#if !CW_FAST
-        p = v3_add(c, v3_scale(n, sp->center.w));
-        /* c is exact input: the error is that of r n (normalisation) and of the sum */
-        s.err = v3_add(v3_scale(shade_abs(p), CW_GAMMA(2)),
-                       v3_scale(v3(1.0f, 1.0f, 1.0f), CW_GAMMA(6) * sp->center.w));
-#endif
-    } else if (hit.kind == CW_PRIM_TRIANGLE) {
-        CW_GLOBAL const cw_triangle *t = &w->triangles[hit.index];
-        vec3 p0 = v3_from4(t->p0), p1 = v3_from4(t->p1), p2 = v3_from4(t->p2);
-        float b0 = 1.0f - hit.u - hit.v;
-        s.ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
-        s.flat = CW_REF(CW_PRIM_TRIANGLE, hit.index) + 1;
-#if !CW_FAST
-        {
-            vec3 q0 = v3_scale(p0, b0), q1 = v3_scale(p1, hit.u), q2 = v3_scale(p2, hit.v);
-            p = v3_add(q0, v3_add(q1, q2));
-            s.err =
-                v3_scale(v3_add(shade_abs(q0), v3_add(shade_abs(q1), shade_abs(q2))), CW_GAMMA(7));
-        }
-#endif
-        if (t->normals >= 0) {
-            vec3 sn = v3_add(v3_scale(v3_from4(w->normals[t->normals]), b0),
-                             v3_add(v3_scale(v3_from4(w->normals[t->normals + 1]), hit.u),
-                                    v3_scale(v3_from4(w->normals[t->normals + 2]), hit.v)));
-            float len = v3_len(sn);
-            s.ns = len > 0.0f ? v3_scale(sn, 1.0f / len) : s.ng;
-        } else {
-            s.ns = s.ng;
-        }
-    } else if (hit.kind == CW_PRIM_POLYGON) {
-        CW_GLOBAL const cw_polygon *pg = &w->polygons[hit.index];
-        vec3 n = v3_from4(pg->plane);
-        s.ng = n;
-        s.flat = CW_REF(CW_PRIM_POLYGON, hit.index) + 1;
-#if !CW_FAST
-        p = v3_sub(p, v3_scale(n, v3_dot(n, p) - pg->plane.w));
-        s.err = v3_scale(v3_add(shade_abs(p), v3(cw_fabs(pg->plane.w), cw_fabs(pg->plane.w),
-                                                 cw_fabs(pg->plane.w))),
-                         CW_GAMMA(8));
-#endif
-    } else {
-        CW_GLOBAL const cw_cone *cn = &w->cones[hit.index];
-        vec3 ax = v3_from4(cn->axis), b = v3_from4(cn->base);
-        float k = cn->slope;
-        vec3 pb = v3_sub(p, b);
-        float h = cw_fmin(cw_fmax(v3_dot(pb, ax), 0.0f), cn->axis.w);
-        vec3 radial = v3_sub(pb, v3_scale(ax, h));
-        float rl = v3_len(radial);
-        vec3 ru = rl > 0.0f ? v3_scale(radial, 1.0f / rl) : v3(0.0f, 0.0f, 0.0f);
-        s.ng = v3_norm(v3_sub(ru, v3_scale(ax, k)));
-#if !CW_FAST
-        p = v3_add(b, v3_add(v3_scale(ax, h), v3_scale(ru, cn->base.w + k * h)));
-        s.err = v3_scale(v3_add(shade_abs(b), shade_abs(p)), CW_GAMMA(8));
-#endif
-    }
-    if (hit.kind != CW_PRIM_TRIANGLE)
-        s.ns = s.ng;
-#if CW_FAST
-    s.err = v3(0.0f, 0.0f, 0.0f);
-    s.flat = 0;
-#endif
-    s.p = p;
-    return s;
-}
+#include "vecmath.h"
+#include "world.h"
 
 /* The origin of a ray leaving the surface in direction dir: the point moved along the
  * geometric normal, to dir's side, past its error bound, then one more ulp away per
@@ -120,7 +22,7 @@ CW_INLINE vec3 shade_spawn(const cw_surface *s, vec3 dir)
 #if CW_FAST
     return v3_add(s->p, v3_scale(ng, 1e-4f));
 #else
-    float dist = v3_dot(shade_abs(ng), s->err);
+    float dist = v3_dot(v3_abs(ng), s->err);
     vec3 off = v3_scale(ng, dist);
     vec3 po = v3_add(s->p, off);
     po.x = off.x > 0.0f   ? cw_nextafter(po.x, CW_INFINITY)
@@ -146,17 +48,6 @@ CW_INLINE float shade_pow(float x, float p)
     if (!(x > 0.0f))
         return 0.0f;
     return cw_exp2(p * cw_log2(x));
-}
-
-CW_INLINE int shade_material(const cw_world *w, cw_hit hit)
-{
-    if (hit.kind == CW_PRIM_SPHERE)
-        return w->spheres[hit.index].material;
-    if (hit.kind == CW_PRIM_TRIANGLE)
-        return w->triangles[hit.index].material;
-    if (hit.kind == CW_PRIM_POLYGON)
-        return w->polygons[hit.index].material;
-    return w->cones[hit.index].material;
 }
 
 /* Adds c to pixel's rgb when several work-items may add to the same pixel at once. */
@@ -223,10 +114,10 @@ CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
         shade_add_local(image, ray->pixel, v3_mul(weight, v3_from4(f->background)));
         return;
     }
-    s = shade_surface(w, hit, v3_from4(ray->origin), d);
+    s = prim_surface(w, hit, v3_from4(ray->origin), d);
     /* two-sided: shade the side facing the ray */
     n = v3_dot(s.ns, d) > 0.0f ? v3_scale(s.ns, -1.0f) : s.ns;
-    m = &materials[shade_material(w, hit)];
+    m = &materials[s.material];
     ka = v3_from4(m->ka);
     kd = v3_from4(m->kd);
     ks = v3_from4(m->ks);

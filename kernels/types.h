@@ -7,7 +7,8 @@
 #include "compat.h"
 
 /* primitive kinds, as stored in cw_hit.kind and in the low two bits of a primitive
- * reference (ref = index * 4 + kind - 1) */
+ * reference (ref = index * 4 + kind - 1; a fifth kind needs a third bit). Each kind's
+ * intersection and surface code is in its own header (sphere.h ...), dispatched by prim.h. */
 #define CW_PRIM_NONE 0
 #define CW_PRIM_SPHERE 1
 #define CW_PRIM_TRIANGLE 2
@@ -62,21 +63,11 @@ typedef struct {
     int band_count;
 } cw_polygon;
 
-/* One node of the flattened bounding volume hierarchy (depth-first order: an interior
- * node's first child is the next node). */
-typedef struct {
-    float lo[3];
-    int start; /* leaf: first entry in the primitive-reference array;
-                * interior: index of the second child */
-    float hi[3];
-    int count; /* leaf: number of primitives (> 0); interior: -(split axis) (0, -1, -2) */
-} cw_bvh_node;
-
 /* Entries of the kernels' BVH traversal stack (the host checks its tree needs no more). */
 #define CW_BVH_STACK 96
 
-/* A node of the 4-wide BVH the kernels traverse, collapsed from the binary one: the
- * boxes of up to four children side by side, for one 4-wide box test. */
+/* A node of the 4-wide BVH the kernels traverse, collapsed from the host's binary one
+ * (host/bvh.h): the boxes of up to four children side by side, for one 4-wide box test. */
 typedef struct {
     cw_float4 lo_x, lo_y, lo_z; /* lower corners of the four child boxes */
     cw_float4 hi_x, hi_y, hi_z; /* upper corners */

@@ -9,8 +9,8 @@
  *     against a double-precision answer on the same float ray;
  *  2. watertightness: a closed mesh far from the origin, 1,000,000 rays from inside aimed
  *     exactly at its shared edges and vertices: no misses;
- *  3. self-hits: secondary rays spawned with the kernels' own shade_surface/shade_spawn
- *     (kernels/shade.h compiled here as host C99) from spheres, triangles, polygons and
+ *  3. self-hits: secondary rays spawned with the kernels' own prim_surface/shade_spawn
+ *     (kernels/shade.h and prim.h compiled here as host C99) from spheres, triangles, polygons and
  *     cones at scales 1e-4 .. 1e4, at the origin and 1e4 x scale away from it;
  *  4. grazing rays at a sphere's silhouette, and exact tangents;
  *  5. degenerate (collinear, coincident), needle and tiny triangles, rays parallel to a
@@ -923,7 +923,7 @@ static void test_watertight_mesh(void **state)
  * Eye rays: from 6 x scale away in random directions at random points of each surface (the
  * sphere's whole disc, grazing rays included; half of the flat pairs' points within 1e-3 of
  * their shared edge or on it); cone hits from inside are skipped (legitimate re-hits there).
- * Spawning: shade_surface and shade_spawn on the host, skip = the surface's s.flat, exactly
+ * Spawning: prim_surface and shade_spawn on the host, skip = the surface's s.flat, exactly
  * as shade_ray does; the fast path as its kernel does (o + t d + 1e-4 n, no skip). */
 #define SH_KINDS 4
 
@@ -1031,7 +1031,7 @@ static dvec sh_target(const sh_layout *L, int g, dvec e)
 
 /* The fast path's origin (shade_spawn with CW_FAST: p = o + t d, moved 1e-4 along the
  * geometric normal to dir's side). ng: the geometric normal (the same formula on both
- * paths, so shade_surface's is used). */
+ * paths, so prim_surface's is used). */
 static vec3 fast_spawn(vec3 p, vec3 ng, vec3 dir)
 {
     vec3 n = v3_dot(dir, ng) < 0.0f ? v3_scale(ng, -1.0f) : ng;
@@ -1100,7 +1100,7 @@ static void sh_run(const host_world *hw, const cw_ray *eye, const cw_hit *eh, si
                          "not match the device's",
                          eh[i].index, eh[i].kind, th, eh[i].t);
         }
-        s = shade_surface(&hw->w, eh[i], o, d);
+        s = prim_surface(&hw->w, eh[i], o, d);
         if (g == 3 && v3_dot(d, s.ng) > 0.0f) { /* inside the cone: legitimate re-hits */
             st->inside_cone++;
             continue;
@@ -1489,7 +1489,7 @@ static void test_degenerate_zero_area(void **state)
         if (hits[i].kind != CW_PRIM_NONE) {
             const cw_triangle *t = &hw.d.tri[hits[i].index];
             cw_surface sf =
-                shade_surface(&hw.w, hits[i], v3_from4(rays[i].origin), v3_from4(rays[i].dir));
+                prim_surface(&hw.w, hits[i], v3_from4(rays[i].origin), v3_from4(rays[i].dir));
             by_kind[tri_kind[hits[i].index]]++;
             if (found < 0)
                 found = (int)i;
@@ -1497,7 +1497,7 @@ static void test_degenerate_zero_area(void **state)
                 char buf[256];
                 ray_str(buf, sizeof buf, &rays[i]);
                 printf("    DEGENERATE HIT: ray %s hits triangle (%.9g, %.9g, %.9g) (%.9g, %.9g, "
-                       "%.9g) (%.9g, %.9g, %.9g) at t = %.9g, u = %.9g, v = %.9g; shade_surface "
+                       "%.9g) (%.9g, %.9g, %.9g) at t = %.9g, u = %.9g, v = %.9g; prim_surface "
                        "normal (%g, %g, %g)\n",
                        buf, t->p0.x, t->p0.y, t->p0.z, t->p1.x, t->p1.y, t->p1.z, t->p2.x, t->p2.y,
                        t->p2.z, hits[i].t, hits[i].u, hits[i].v, sf.ng.x, sf.ng.y, sf.ng.z);
@@ -1510,7 +1510,7 @@ static void test_degenerate_zero_area(void **state)
     for (i = 0; i < n; i++)
         fast_hits += hits[i].kind != CW_PRIM_NONE;
     printf("zero-area triangles (%d; %zu rays at their segments): robust %ld hits, %ld NaN in "
-           "hits, %ld non-finite normals from shade_surface; fast %ld hits\n",
+           "hits, %ld non-finite normals from prim_surface; fast %ld hits\n",
            nt, n, rob_hits, nan, shade_nan, fast_hits);
     for (k = 0; k < 3; k++)
         printf("  %s: %ld rays, robust %ld hits\n", kind_name[k], aimed[k], by_kind[k]);
@@ -1610,7 +1610,7 @@ static void test_needle_triangles(void **state)
         rob_hits += hits[i].kind != CW_PRIM_NONE;
         if (hits[i].kind != CW_PRIM_NONE) {
             cw_surface sf =
-                shade_surface(&hw.w, hits[i], v3_from4(rays[i].origin), v3_from4(rays[i].dir));
+                prim_surface(&hw.w, hits[i], v3_from4(rays[i].origin), v3_from4(rays[i].dir));
             if (!isfinite(sf.ng.x) || !isfinite(sf.ng.y) || !isfinite(sf.ng.z) || !isfinite(sf.p.x))
                 shade_nan++;
         }
@@ -1643,7 +1643,7 @@ static void test_needle_triangles(void **state)
     }
     printf("needle triangles (%d: base 1e-6, sides 1, at distance 2; %zu rays in and around "
            "them): double says %ld inside; robust %ld hits, %ld agree, %ld disagree within the "
-           "band of an edge, %ld outside it, %ld NaN, %ld non-finite from shade_surface; fast "
+           "band of an edge, %ld outside it, %ld NaN, %ld non-finite from prim_surface; fast "
            "%ld hits, %ld agree\n",
            nt, n, ref_in, rob_hits, agree, band, out, nan, shade_nan, fast_hits, fast_agree);
     host_world_free(&hw);

@@ -21,7 +21,7 @@
 #include "testutil.h"
 
 #include "devscene.h"
-#include "intersect.h"
+#include "prim.h"
 #include "render.h"
 #include "render_debug.h"
 #include "scene.h"

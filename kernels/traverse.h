@@ -1,47 +1,18 @@
 /* bvh_: closest-hit and any-hit traversal of the 4-wide bounding volume hierarchy
  * (cw_bvh4_node), built on the host as a binary SAH tree (host/bvh.c) and collapsed so
- * that one 4-wide box test covers up to four children. The traversal stack holds
- * CW_BVH_STACK entries; the host checks that its tree never needs more. */
-#ifndef CW_BVH_KERNEL_H
-#define CW_BVH_KERNEL_H
+ * that one 4-wide box test covers up to four children; the primitives of a leaf are
+ * tested through prim_intersect (prim.h). The traversal stack holds CW_BVH_STACK entries;
+ * the host checks that its tree never needs more. (The host's builder, host/bvh.h, shares
+ * the bvh_ prefix: no function name is in both.) */
+#ifndef CW_TRAVERSE_H
+#define CW_TRAVERSE_H
 
-#include "intersect.h"
+#include "flags.h"
+#include "isect.h"
+#include "prim.h"
 #include "types.h"
-
-/* Tests the ray against one referenced primitive; on a hit closer than *tmax, records
- * it in *hit and lowers *tmax. */
-CW_INLINE void bvh_test_ref(const cw_world *w, int ref, const cw_rayinfo *ri, float tmin,
-                            float *tmax, cw_hit *hit)
-{
-    int kind = CW_REF_KIND(ref), index = CW_REF_INDEX(ref);
-    float t = 0.0f, u = 0.0f, v = 0.0f;
-    int got = 0;
-#if CW_HAS_SPHERES
-    if (kind == CW_PRIM_SPHERE)
-        got = isect_sphere(&w->spheres[index], ri->o, ri->d, tmin, *tmax, &t);
-#endif
-#if CW_HAS_TRIANGLES
-    if (kind == CW_PRIM_TRIANGLE)
-        got = isect_triangle(&w->triangles[index], ri, tmin, *tmax, &t, &u, &v);
-#endif
-#if CW_HAS_POLYGONS
-    if (kind == CW_PRIM_POLYGON)
-        got = isect_polygon(&w->polygons[index], w->poly_verts, w->poly_bands, ri->o, ri->d, tmin,
-                            *tmax, &t);
-#endif
-#if CW_HAS_CONES
-    if (kind == CW_PRIM_CONE)
-        got = isect_cone(&w->cones[index], ri->o, ri->d, tmin, *tmax, &t);
-#endif
-    if (got) {
-        *tmax = t;
-        hit->t = t;
-        hit->u = u;
-        hit->v = v;
-        hit->kind = kind;
-        hit->index = index;
-    }
-}
+#include "vecmath.h"
+#include "world.h"
 
 /* The four child boxes of a node against [tmin, tmax] at once: entry and exit distances
  * per lane; a lane is hit when entry <= exit. The robust path widens the exit by
@@ -102,7 +73,7 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
                 for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                     int ref = w->refs[k];
                     if (ref + 1 != skip)
-                        bvh_test_ref(w, ref, &ri, tmin, &t_best, &hit);
+                        prim_intersect(w, ref, &ri, tmin, &t_best, &hit);
                 }
             } else {
                 /* insertion by entry distance, nearest first */
@@ -173,7 +144,7 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
                     continue;
                 t_lim = tmax;
                 hit.kind = CW_PRIM_NONE;
-                bvh_test_ref(w, ref, &ri, tmin, &t_lim, &hit);
+                prim_intersect(w, ref, &ri, tmin, &t_lim, &hit);
                 if (hit.kind != CW_PRIM_NONE)
                     return 1;
             }

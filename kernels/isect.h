@@ -1,0 +1,61 @@
+/* isect_: what every ray-primitive test shares (Shirley & Marschner 4.4). Rays have unit
+ * directions; a hit counts when tmin < t < tmax. cw_rayinfo holds what the tests need
+ * precomputed once per ray. The tests themselves are in the primitive headers (sphere.h,
+ * triangle.h, polygon.h, cone.h); prim.h dispatches over the kinds.
+ *
+ * Two builds: the robust path (default) and the fast path (CW_FAST=1, with
+ * -cl-fast-relaxed-math): textbook formulas with a plain epsilon. */
+#ifndef CW_ISECT_H
+#define CW_ISECT_H
+
+#include "flags.h"
+#include "types.h"
+#include "vecmath.h"
+
+/* Finite stand-ins for infinity: the fast path is built with -cl-fast-relaxed-math,
+ * which lets the compiler assume no value is infinite. */
+#define CW_FAR 1e30f /* tmax of camera and secondary rays */
+
+/* A ray with what the tests need precomputed once: the inverse direction for the box
+ * test, and the axis permutation and shear of the watertight triangle test. */
+typedef struct {
+    vec3 o, d, inv;
+    int kx, ky, kz;
+    float sx, sy, sz;
+} cw_rayinfo;
+
+CW_INLINE float isect_axis(vec3 v, int k)
+{
+    return k == 0 ? v.x : (k == 1 ? v.y : v.z);
+}
+
+CW_INLINE float isect_safe_inv(float x)
+{
+    /* 1/x, but never infinite: the box test then needs no special case for 0 */
+    return 1.0f / (cw_fabs(x) > 1e-30f ? x : cw_copysign(1e-30f, x));
+}
+
+CW_INLINE cw_rayinfo isect_rayinfo(vec3 o, vec3 d)
+{
+    cw_rayinfo ri;
+    float ax = cw_fabs(d.x), ay = cw_fabs(d.y), az = cw_fabs(d.z), dz;
+    int tmp;
+    ri.o = o;
+    ri.d = d;
+    ri.inv = v3(isect_safe_inv(d.x), isect_safe_inv(d.y), isect_safe_inv(d.z));
+    ri.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    ri.kx = ri.kz == 2 ? 0 : ri.kz + 1;
+    ri.ky = ri.kx == 2 ? 0 : ri.kx + 1;
+    dz = isect_axis(d, ri.kz);
+    if (dz < 0.0f) { /* keep the winding */
+        tmp = ri.kx;
+        ri.kx = ri.ky;
+        ri.ky = tmp;
+    }
+    ri.sx = isect_axis(d, ri.kx) / dz;
+    ri.sy = isect_axis(d, ri.ky) / dz;
+    ri.sz = 1.0f / dz;
+    return ri;
+}
+
+#endif

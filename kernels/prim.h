@@ -1,0 +1,103 @@
+/* prim_: the one place that dispatches over the primitive kinds (CW_PRIM_* in types.h),
+ * for the traversal (prim_intersect) and for shading (prim_surface). Each kind's own code
+ * is in its header; a kind whose CW_HAS_* feature is 0 is compiled out of both. */
+#ifndef CW_PRIM_H
+#define CW_PRIM_H
+
+#include "cone.h"
+#include "flags.h"
+#include "isect.h"
+#include "polygon.h"
+#include "sphere.h"
+#include "surface.h"
+#include "triangle.h"
+#include "types.h"
+#include "vecmath.h"
+#include "world.h"
+
+/* Tests the ray against one referenced primitive (a CW_REF); on a hit closer than *tmax,
+ * records it in *hit and lowers *tmax. */
+CW_INLINE void prim_intersect(const cw_world *w, int ref, const cw_rayinfo *ri, float tmin,
+                              float *tmax, cw_hit *hit)
+{
+    int kind = CW_REF_KIND(ref), index = CW_REF_INDEX(ref);
+    float t = 0.0f, u = 0.0f, v = 0.0f;
+    int got = 0;
+    switch (kind) {
+#if CW_HAS_SPHERES
+    case CW_PRIM_SPHERE:
+        got = isect_sphere(&w->spheres[index], ri->o, ri->d, tmin, *tmax, &t);
+        break;
+#endif
+#if CW_HAS_TRIANGLES
+    case CW_PRIM_TRIANGLE:
+        got = isect_triangle(&w->triangles[index], ri, tmin, *tmax, &t, &u, &v);
+        break;
+#endif
+#if CW_HAS_POLYGONS
+    case CW_PRIM_POLYGON:
+        got = isect_polygon(&w->polygons[index], w->poly_verts, w->poly_bands, ri->o, ri->d, tmin,
+                            *tmax, &t);
+        break;
+#endif
+#if CW_HAS_CONES
+    case CW_PRIM_CONE:
+        got = isect_cone(&w->cones[index], ri->o, ri->d, tmin, *tmax, &t);
+        break;
+#endif
+    default:
+        break;
+    }
+    if (got) {
+        *tmax = t;
+        hit->t = t;
+        hit->u = u;
+        hit->v = v;
+        hit->kind = kind;
+        hit->index = index;
+    }
+}
+
+/* The surface at a hit (not a miss) of the ray o + t d: the kind's surface_* function,
+ * given the point o + t d. */
+CW_INLINE cw_surface prim_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d)
+{
+    cw_surface s;
+    vec3 p = v3_add(o, v3_scale(d, hit.t));
+    switch (hit.kind) {
+#if CW_HAS_SPHERES
+    case CW_PRIM_SPHERE:
+        s = surface_sphere(w, hit, p);
+        break;
+#endif
+#if CW_HAS_TRIANGLES
+    case CW_PRIM_TRIANGLE:
+        s = surface_triangle(w, hit, p);
+        break;
+#endif
+#if CW_HAS_POLYGONS
+    case CW_PRIM_POLYGON:
+        s = surface_polygon(w, hit, p);
+        break;
+#endif
+#if CW_HAS_CONES
+    case CW_PRIM_CONE:
+        s = surface_cone(w, hit, p);
+        break;
+#endif
+    default: /* a kind compiled out is never hit */
+        s.p = p;
+        s.ng = s.ns = v3(0.0f, 0.0f, 1.0f);
+        s.err = v3(0.0f, 0.0f, 0.0f);
+        s.flat = 0;
+        s.material = 0;
+        break;
+    }
+#if CW_FAST
+    s.err = v3(0.0f, 0.0f, 0.0f);
+    s.flat = 0;
+#endif
+    return s;
+}
+
+#endif

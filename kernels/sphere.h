@@ -1,0 +1,86 @@
+/* Spheres (cw_sphere): the ray-sphere test and the surface at a hit. */
+#ifndef CW_SPHERE_H
+#define CW_SPHERE_H
+
+#include "flags.h"
+#include "isect.h"
+#include "surface.h"
+#include "types.h"
+#include "vecmath.h"
+#include "world.h"
+
+/* Ray-sphere. With f = o - c and unit d the quadratic is t^2 + 2bt + c = 0, b = f.d,
+ * c = f.f - R^2.
+ * Robust: the discriminant b^2 - c is computed as R^2 - |f - b d|^2 (the squared distance
+ * from the centre to the line), which does not cancel for far or tiny spheres, and the
+ * roots as q = -b - sign(b) sqrt(disc), t = q and c/q, which avoids cancellation too.
+ * Fast: the textbook b^2 - c and (-b -+ sqrt(disc)).
+ * disc < 0: no hit; disc = 0: one (tangent) hit; disc > 0: two, nearest valid wins. */
+CW_INLINE int isect_sphere(CW_GLOBAL const cw_sphere *s, vec3 o, vec3 d, float tmin, float tmax,
+                           float *t_out)
+{
+    vec3 c = v3_from4(s->center);
+    float r = s->center.w;
+    vec3 f = v3_sub(o, c);
+    float b = v3_dot(f, d);
+    float cc, t0, t1, tmp;
+#if CW_FAST
+    float disc = b * b - (v3_dot(f, f) - r * r), sq;
+    if (disc < 0.0f)
+        return 0;
+    sq = cw_sqrt(disc);
+    t0 = -b - sq;
+    t1 = -b + sq;
+    (void)cc;
+    (void)tmp;
+#else
+    vec3 perp = v3_sub(f, v3_scale(d, b));
+    float disc = r * r - v3_dot(perp, perp);
+    float q;
+    if (disc < 0.0f)
+        return 0;
+    cc = v3_dot(f, f) - r * r;
+    q = -b - (b >= 0.0f ? 1.0f : -1.0f) * cw_sqrt(disc);
+    if (q == 0.0f) /* ray starts at the centre of a zero-radius sphere */
+        return 0;
+    t0 = q;
+    t1 = cc / q;
+    if (t0 > t1) {
+        tmp = t0;
+        t0 = t1;
+        t1 = tmp;
+    }
+#endif
+    if (t0 > tmin && t0 < tmax) {
+        *t_out = t0;
+        return 1;
+    }
+    if (t1 > tmin && t1 < tmax) {
+        *t_out = t1;
+        return 1;
+    }
+    return 0;
+}
+
+/* The surface at a sphere hit; p = o + t d is projected back onto the sphere. */
+CW_INLINE cw_surface surface_sphere(const cw_world *w, cw_hit hit, vec3 p)
+{
+    cw_surface s;
+    CW_GLOBAL const cw_sphere *sp = &w->spheres[hit.index];
+    vec3 c = v3_from4(sp->center);
+    vec3 n = v3_norm(v3_sub(p, c));
+    s.ng = n;
+#if !CW_FAST
+    p = v3_add(c, v3_scale(n, sp->center.w));
+    /* c is exact input: the error is that of r n (normalisation) and of the sum */
+    s.err = v3_add(v3_scale(v3_abs(p), CW_GAMMA(2)),
+                   v3_scale(v3(1.0f, 1.0f, 1.0f), CW_GAMMA(6) * sp->center.w));
+#endif
+    s.ns = s.ng;
+    s.flat = 0;
+    s.material = sp->material;
+    s.p = p;
+    return s;
+}
+
+#endif
