@@ -12,6 +12,24 @@
 #include "polygon.h"
 #include "scene_geom.h"
 
+/* One line per kernel buffer of kernels/world.h: where its host array is. */
+void devscene_world_arrays(const devscene *ds, devscene_world *w)
+{
+#define DEVSCENE_SET(name, data, count)                                                            \
+    w->name = (data);                                                                              \
+    w->n_##name = (size_t)(count);
+    DEVSCENE_SET(nodes, ds->tree4.nodes, ds->tree4.num_nodes)
+    DEVSCENE_SET(refs, ds->refs, ds->tree.num_refs)
+    DEVSCENE_SET(spheres, ds->sph, ds->nsph)
+    DEVSCENE_SET(triangles, ds->tri, ds->ntri)
+    DEVSCENE_SET(normals, ds->normals, ds->nnorm)
+    DEVSCENE_SET(polygons, ds->pg, ds->npg)
+    DEVSCENE_SET(poly_verts, ds->verts, ds->nverts)
+    DEVSCENE_SET(poly_bands, ds->bands, ds->nbands)
+    DEVSCENE_SET(cones, ds->cones, ds->ncone)
+#undef DEVSCENE_SET
+}
+
 cw_float4 devscene_f4(vec3f v, float w)
 {
     cw_float4 r;
@@ -176,6 +194,7 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
     ds->normals = calloc(3 * s->triangles.count + 1, sizeof *ds->normals);
     ds->pg = calloc(s->polygons.count + 1, sizeof *ds->pg);
     ds->verts = calloc(s->poly_verts.count + 1, sizeof *ds->verts);
+    ds->nverts = (int)s->poly_verts.count;
     ds->cones = calloc(s->cones.count + 1, sizeof *ds->cones);
     ds->lights = calloc(s->lights.count + 1, sizeof *ds->lights);
     ds->mats = calloc(s->materials.count + 1, sizeof *ds->mats);

@@ -7,6 +7,7 @@
 #include "bvh.h"
 #include "scene.h"
 #include "types.h"
+#include "world.h"
 
 /* The device arrays of a scene, and the BVH over all its primitives. Degenerate
  * primitives (no surface) are left out, the others keep their order within their kind:
@@ -25,13 +26,26 @@ typedef struct {
     int *refs;    /* BVH leaf entries as CW_REFs */
     int *bands;   /* edge bands of large polygons (cw_polygon) */
     size_t nbands, bands_cap;
-    int nsph, ntri, nnorm, npg, ncone, nbox;
+    int nsph, ntri, nnorm, npg, nverts, ncone, nbox;
     bvh tree;
     bvh4 tree4;
     int dropped;      /* primitives left out as degenerate */
     int mirrors;      /* some material has km > 0 */
     int transmitters; /* some material has kt > 0 */
 } devscene;
+
+/* The host array behind each kernel buffer (kernels/world.h): for X(type, name, what), the
+ * elements `name` and their number `n_name`. */
+#define DEVSCENE_ARRAY(type, name, what)                                                           \
+    const type *name;                                                                              \
+    size_t n_##name;
+typedef struct {
+    CW_WORLD_BUFFERS(DEVSCENE_ARRAY)
+} devscene_world;
+#undef DEVSCENE_ARRAY
+
+/* Fills w with the arrays of ds, one per kernel buffer (after devscene_build_bvh). */
+void devscene_world_arrays(const devscene *ds, devscene_world *w);
 
 cw_float4 devscene_f4(vec3f v, float w);
 

@@ -9,16 +9,11 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include "sys.h"
+
 #define REDRAW_S 0.1 /* at most ten redraws a second */
 #define BAR_MIN 10
 #define BAR_MAX 40
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
 int progress_wanted(int quiet, const char *env, int is_tty)
 {
@@ -48,7 +43,7 @@ void progress_init(progress_bar *p, FILE *out, int enabled)
     p->out = out;
     p->enabled = enabled && out;
     p->columns = p->enabled ? terminal_columns(out) : 80;
-    p->t0 = now_s();
+    p->t0 = sys_now();
     p->last = -1.0;
     p->interval = REDRAW_S;
 }
@@ -77,7 +72,7 @@ void progress_status(progress_bar *p, const char *msg)
 
 void progress_begin(progress_bar *p)
 {
-    p->t0 = now_s();
+    p->t0 = sys_now();
     p->last = -1.0;
 }
 
@@ -155,7 +150,7 @@ int progress_update(void *ctx, double fraction, unsigned long long rays)
     double t;
     if (!p || !p->enabled)
         return 0;
-    t = now_s();
+    t = sys_now();
     if (p->last >= 0 && t - p->last < p->interval)
         return 0;
     p->last = t;

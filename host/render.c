@@ -31,7 +31,6 @@ _Static_assert(sizeof(cw_light) == 32, "cw_light layout");
 _Static_assert(sizeof(cw_frame) == 192, "cw_frame layout");
 _Static_assert(sizeof(cw_ray) == 64, "cw_ray layout");
 _Static_assert(sizeof(cw_hit) == 32, "cw_hit layout");
-_Static_assert(sizeof(cw_bvh_node) == 32, "cw_bvh_node layout");
 _Static_assert(sizeof(cw_bvh4_node) == 128, "cw_bvh4_node layout");
 
 int renderer_list_devices(char *err, size_t errlen)
@@ -91,7 +90,7 @@ const char *renderer_device_name(const renderer *r)
 static void release_scene(renderer *r)
 {
     rpass_release(&r->world.frame);
-#define RELEASE_WORLD(type, name) rpass_release(&r->world.name);
+#define RELEASE_WORLD(type, name, what) rpass_release(&r->world.name);
     CW_WORLD_BUFFERS(RELEASE_WORLD)
 #undef RELEASE_WORLD
     rpass_release(&r->lights);
@@ -213,35 +212,17 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
     return 0;
 }
 
-/* The host array behind each buffer of CW_WORLD_BUFFERS, from the devscene ds of the
- * scene s: WORLD_SRC_<name>(ds, s) gives its elements, their number and the buffer's name
- * in messages. (Written against today's devscene fields: one line per buffer.) */
-#define WORLD_SRC_nodes(ds, s) (ds)->tree4.nodes, (ds)->tree4.num_nodes, "BVH nodes"
-#define WORLD_SRC_refs(ds, s) (ds)->refs, (ds)->tree.num_refs, "BVH references"
-#define WORLD_SRC_spheres(ds, s) (ds)->sph, (ds)->nsph, "spheres"
-#define WORLD_SRC_triangles(ds, s) (ds)->tri, (ds)->ntri, "triangles"
-#define WORLD_SRC_normals(ds, s) (ds)->normals, (ds)->nnorm, "vertex normals"
-#define WORLD_SRC_polygons(ds, s) (ds)->pg, (ds)->npg, "polygons"
-#define WORLD_SRC_poly_verts(ds, s) (ds)->verts, (s)->poly_verts.count, "polygon vertices"
-#define WORLD_SRC_poly_bands(ds, s) (ds)->bands, (ds)->nbands, "polygon edge bands"
-#define WORLD_SRC_cones(ds, s) (ds)->cones, (ds)->ncone, "cones"
-
-/* Uploads every buffer of CW_WORLD_BUFFERS in list order (the frame is uploaded first by
- * the caller); each array's element type must be the one world.h names. */
-static int upload_world(renderer *r, const devscene *ds, const scene *s, char *err, size_t errlen)
+/* Uploads every buffer of CW_WORLD_BUFFERS in list order from the devscene's arrays (the
+ * frame is uploaded first by the caller). */
+static int upload_world(renderer *r, const devscene *ds, char *err, size_t errlen)
 {
-#define UPLOAD_ARRAY(type, name, data, count, what)                                                \
-    {                                                                                              \
-        const type *elems = (data);                                                                \
-        if (upload(r, &r->world.name, elems, (size_t)(count), sizeof(type), what, err, errlen))    \
-            return -1;                                                                             \
-    }
-#define UPLOAD_FROM(type, name, src) UPLOAD_ARRAY(type, name, src)
-#define UPLOAD_WORLD(type, name) UPLOAD_FROM(type, name, WORLD_SRC_##name(ds, s))
+    devscene_world a;
+    devscene_world_arrays(ds, &a);
+#define UPLOAD_WORLD(type, name, what)                                                             \
+    if (upload(r, &r->world.name, a.name, a.n_##name, sizeof(type), what, err, errlen))            \
+        return -1;
     CW_WORLD_BUFFERS(UPLOAD_WORLD)
 #undef UPLOAD_WORLD
-#undef UPLOAD_FROM
-#undef UPLOAD_ARRAY
     return 0;
 }
 
@@ -301,7 +282,7 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
         goto out_free;
     t0 = sys_now();
     if (upload(r, &r->world.frame, f, 1, sizeof *f, "frame", err, errlen) ||
-        upload_world(r, &ds, s, err, errlen) ||
+        upload_world(r, &ds, err, errlen) ||
         upload(r, &r->lights, ds.lights, s->lights.count, sizeof *ds.lights, "lights", err,
                errlen) ||
         upload(r, &r->materials, ds.mats, s->materials.count, sizeof *ds.mats, "materials", err,

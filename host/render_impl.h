@@ -16,7 +16,7 @@
  * CW_WORLD_NARGS arguments: the frame, then one per CW_WORLD_BUFFERS line (generated). */
 typedef struct {
     cl_mem frame;
-#define RENDER_WORLD_FIELD(type, name) cl_mem name;
+#define RENDER_WORLD_FIELD(type, name, what) cl_mem name;
     CW_WORLD_BUFFERS(RENDER_WORLD_FIELD)
 #undef RENDER_WORLD_FIELD
 } render_world;

@@ -176,7 +176,7 @@ static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err
 {
     if (set_mem(k, CW_WORLD_ARG_frame, &r->world.frame, kname, r, err, errlen))
         return -1;
-#define SET_WORLD_ARG(type, name)                                                                  \
+#define SET_WORLD_ARG(type, name, what)                                                            \
     if (set_mem(k, CW_WORLD_ARG_##name, &r->world.name, kname, r, err, errlen))                    \
         return -1;
     CW_WORLD_BUFFERS(SET_WORLD_ARG)

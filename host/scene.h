@@ -94,12 +94,6 @@ typedef struct {
 
 #define SCENE_AT(arr, type, i) (((type *)(arr).data)[i])
 
-/* Old names of limits now in config.h, kept until every user says CW_*. */
-#define SCENE_DEFAULT_MAX_DEPTH CW_DEFAULT_DEPTH
-#define SCENE_MAX_SIDE CW_MAX_SIDE
-#define SCENE_MAX_PIXELS CW_MAX_PIXELS
-#define SCENE_MAX_FILE_BYTES CW_MAX_FILE_BYTES
-
 /* Sets defaults: no objects, black background, zero ambient, depth CW_DEFAULT_DEPTH. */
 void scene_init(scene *s);
 void scene_free(scene *s);

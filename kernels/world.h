@@ -2,27 +2,28 @@
  * argument order, written once. The kernels' parameters (CW_WORLD_ARGS), the cw_world
  * struct, its binding (CW_MAKE_WORLD) and the argument indices (cw_world_arg) are generated
  * from it here; the host generates its cl_mem fields, uploads, release and argument binding
- * from the same list (host/render.c). Adding a buffer is one line in CW_WORLD_BUFFERS. */
+ * from the same list (host/render.c), and host/devscene.c names the host array of each.
+ * Adding a buffer: one line here, and its array in host/devscene.c. */
 #ifndef CW_WORLD_H
 #define CW_WORLD_H
 
 #include "types.h"
 
-/* X(element type, name): one line per buffer. */
+/* X(element type, name, what): one line per buffer; `what` names it in messages. */
 #define CW_WORLD_BUFFERS(X)                                                                        \
-    X(cw_bvh4_node, nodes) /* the 4-wide BVH */                                                    \
-    X(int, refs)           /* BVH leaf entries: CW_REF(kind, index) */                             \
-    X(cw_sphere, spheres)                                                                          \
-    X(cw_triangle, triangles)                                                                      \
-    X(cw_float4, normals) /* vertex normals of smooth triangles */                                 \
-    X(cw_polygon, polygons)                                                                        \
-    X(cw_float4, poly_verts)                                                                       \
-    X(int, poly_bands) /* edge bands of large polygons (cw_polygon) */                             \
-    X(cw_cone, cones)
+    X(cw_bvh4_node, nodes, "BVH nodes") /* the 4-wide BVH */                                       \
+    X(int, refs, "BVH references")      /* BVH leaf entries: CW_REF(kind, index) */                \
+    X(cw_sphere, spheres, "spheres")                                                               \
+    X(cw_triangle, triangles, "triangles")                                                         \
+    X(cw_float4, normals, "vertex normals") /* of smooth triangles */                              \
+    X(cw_polygon, polygons, "polygons")                                                            \
+    X(cw_float4, poly_verts, "polygon vertices")                                                   \
+    X(int, poly_bands, "polygon edge bands") /* of large polygons (cw_polygon) */                  \
+    X(cw_cone, cones, "cones")
 
 /* The scene as the kernels see it. */
 typedef struct {
-#define CW_WORLD_FIELD(type, name) CW_GLOBAL const type *name;
+#define CW_WORLD_FIELD(type, name, what) CW_GLOBAL const type *name;
     CW_WORLD_BUFFERS(CW_WORLD_FIELD)
 #undef CW_WORLD_FIELD
     int num_nodes; /* from the frame: 0 for an empty scene */
@@ -30,16 +31,16 @@ typedef struct {
 
 /* Kernel argument indices: the frame first, then each buffer; kernels that take the world
  * have their own arguments from CW_WORLD_NARGS on. */
-#define CW_WORLD_INDEX(type, name) CW_WORLD_ARG_##name,
+#define CW_WORLD_INDEX(type, name, what) CW_WORLD_ARG_##name,
 enum cw_world_arg { CW_WORLD_ARG_frame, CW_WORLD_BUFFERS(CW_WORLD_INDEX) CW_WORLD_NARGS };
 #undef CW_WORLD_INDEX
 
 /* The parameters of an entry kernel that takes the world: the frame f, then the buffers. */
-#define CW_WORLD_PARAM(type, name) , CW_GLOBAL const type *name
+#define CW_WORLD_PARAM(type, name, what) , CW_GLOBAL const type *name
 #define CW_WORLD_ARGS CW_GLOBAL const cw_frame *f CW_WORLD_BUFFERS(CW_WORLD_PARAM)
 
 /* Binds the parameters of CW_WORLD_ARGS into the cw_world w. */
-#define CW_WORLD_BIND(type, name) (w).name = name;
+#define CW_WORLD_BIND(type, name, what) (w).name = name;
 #define CW_MAKE_WORLD(w)                                                                           \
     do {                                                                                           \
         CW_WORLD_BUFFERS(CW_WORLD_BIND)                                                            \

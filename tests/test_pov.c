@@ -612,7 +612,6 @@ static void set_case(pov_case *pc, const char *scene_name, int depth, enum varia
 
 static int group_setup(void **state)
 {
-    char err[2048];
     (void)state;
     snprintf(g_tmpdir, sizeof g_tmpdir, "/tmp/cw-test-pov-XXXXXX");
     /* /tmp: POV-Ray's default I/O restrictions allow writing there */
@@ -620,11 +619,7 @@ static int group_setup(void **state)
         fprintf(stderr, "test_pov: cannot create a temporary folder: %s\n", strerror(errno));
         return -1;
     }
-    if (renderer_create(&g_renderer, NULL, err, sizeof err) != 0) {
-        fprintf(stderr, "test_pov: %s\n", err);
-        return -1;
-    }
-    return 0;
+    return tu_renderer_open(&g_renderer, 0);
 }
 
 static int group_teardown(void **state)
@@ -633,8 +628,7 @@ static int group_teardown(void **state)
     struct dirent *e;
     char path[512];
     (void)state;
-    renderer_destroy(g_renderer);
-    g_renderer = NULL;
+    tu_renderer_close(&g_renderer);
     if (getenv("CW_POV_KEEP")) {
         printf("test_pov: CW_POV_KEEP set: the .pov files and POV-Ray images are in %s\n",
                g_tmpdir);

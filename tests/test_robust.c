@@ -45,6 +45,7 @@
 #include "shade.h"
 
 #include "testutil.h"
+#include "sys.h"
 
 #include "devscene.h"
 
@@ -70,34 +71,22 @@ static int setup(void **state)
 {
     render_settings st;
     (void)state;
-    if (renderer_create(&R, NULL, err, sizeof err) != 0 ||
-        renderer_create(&RF, NULL, err, sizeof err) != 0) {
-        fprintf(stderr, "renderer_create: %s\n", err);
+    if (tu_renderer_open(&R, 1) != 0 || tu_renderer_open(&RF, 0) != 0)
         return -1;
-    }
     render_settings_default(&st);
     st.precision = RENDER_FAST;
     if (renderer_set_settings(RF, &st, err, sizeof err) != 0) {
         fprintf(stderr, "renderer_set_settings: %s\n", err);
         return -1;
     }
-    printf("device: %s\n", renderer_device_name(R));
     return 0;
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    renderer_destroy(RF);
-    renderer_destroy(R);
-    return 0;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+    tu_renderer_close(&RF);
+    return tu_renderer_close(&R);
 }
 
 /* ---- deterministic random numbers (xorshift64*) -------------------------------------- */
@@ -358,16 +347,14 @@ typedef struct {
 static void host_world_init(host_world *hw, const scene *s)
 {
     char msg[256];
+    devscene_world a;
     memset(&hw->w, 0, sizeof hw->w);
     if (devscene_convert(s, &hw->d, msg, sizeof msg) != 0)
         fail_msg("%s", msg);
-    hw->w.spheres = hw->d.sph;
-    hw->w.triangles = hw->d.tri;
-    hw->w.normals = hw->d.normals;
-    hw->w.polygons = hw->d.pg;
-    hw->w.poly_verts = hw->d.verts;
-    hw->w.poly_bands = hw->d.bands;
-    hw->w.cones = hw->d.cones;
+    devscene_world_arrays(&hw->d, &a);
+#define HOST_WORLD_BIND(type, name, what) hw->w.name = a.name;
+    CW_WORLD_BUFFERS(HOST_WORLD_BIND)
+#undef HOST_WORLD_BIND
 }
 
 static void host_world_free(host_world *hw)
@@ -584,7 +571,7 @@ static void test_sphere_far_tiny(void **state)
     cw_hit *hits = malloc(per * sizeof *hits);
     size_t ir, id, i;
     long total_out = 0, total_nan = 0;
-    double t0 = now_s(), worst_rel = 0;
+    double t0 = sys_now(), worst_rel = 0;
     (void)state;
     assert_true(rays && hits);
     rng_seed(1);
@@ -622,7 +609,7 @@ static void test_sphere_far_tiny(void **state)
     }
     printf("  far-tiny spheres: %ld disagreements outside the band, %ld NaN, worst rel t err "
            "%.2g (%.1f s)\n",
-           total_out, total_nan, worst_rel, now_s() - t0);
+           total_out, total_nan, worst_rel, sys_now() - t0);
     free(rays);
     free(hits);
     assert_int_equal(total_nan, 0);
@@ -643,7 +630,7 @@ static void test_sphere_huge_and_surface(void **state)
     cw_hit *hits = malloc(per * sizeof *hits);
     size_t ih, i, is, id;
     long total_out = 0, total_nan = 0;
-    double t0 = now_s();
+    double t0 = sys_now();
     cw_sphere sp;
     dvec c;
     (void)state;
@@ -711,7 +698,7 @@ static void test_sphere_huge_and_surface(void **state)
         }
     }
     printf("  huge and on-surface spheres: %ld disagreements outside the band, %ld NaN (%.1f s)\n",
-           total_out, total_nan, now_s() - t0);
+           total_out, total_nan, sys_now() - t0);
     free(rays);
     free(hits);
     assert_int_equal(total_nan, 0);
@@ -813,7 +800,7 @@ static void watertight_case(const char *what, dvec centre, double radius, long n
     int(*edges)[2];
     int ne = 0, i, k;
     long done, rob_miss = 0, fast_miss = 0, n_edge = 0, n_vert = 0, nan = 0;
-    double max_rel = 0, t0 = now_s();
+    double max_rel = 0, t0 = sys_now();
     cw_ray *rays = malloc(BATCH * sizeof *rays);
     cw_hit *hits = malloc(BATCH * sizeof *hits);
     double *texp = malloc(BATCH * sizeof *texp);
@@ -884,7 +871,8 @@ static void watertight_case(const char *what, dvec centre, double radius, long n
     printf("  %s: %d triangles, %d shared edges: %ld rays (%ld at edge points, %ld at vertices): "
            "robust %ld misses, %ld NaN, max rel t error %.2g; fast (Moeller-Trumbore) %ld misses "
            "(%.1f s)\n",
-           what, m.nf, ne, nrays, n_edge, n_vert, rob_miss, nan, max_rel, fast_miss, now_s() - t0);
+           what, m.nf, ne, nrays, n_edge, n_vert, rob_miss, nan, max_rel, fast_miss,
+           sys_now() - t0);
     *rob_miss_out += rob_miss + nan;
     /* the exit point is the aimed-at point: t within a few u of the coordinates' size */
     assert_true(max_rel < 1e-4);
@@ -1207,7 +1195,7 @@ static void test_selfhit_scales(void **state)
     cw_hit *eh = malloc(n * sizeof *eh);
     size_t is, io, i;
     long total = 0, total_nan = 0, fast_total = 0, exact = 0, checked = 0;
-    double t0 = now_s();
+    double t0 = sys_now();
     (void)state;
     assert_true(eye && eh);
     rng_seed(4);
@@ -1270,7 +1258,7 @@ static void test_selfhit_scales(void **state)
     }
     printf("  self-hits: robust %ld, NaN %ld; fast %ld; device t equal to the host's kernel code "
            "bit for bit on %ld of %ld eye hits (%.1f s)\n",
-           total, total_nan, fast_total, exact, checked, now_s() - t0);
+           total, total_nan, fast_total, exact, checked, sys_now() - t0);
     free(eye);
     free(eh);
     assert_int_equal(total_nan, 0);
@@ -1893,7 +1881,7 @@ static void test_image_invariance(void **state)
     size_t is, io;
     long fails = 0, nan = 0, fast_fails = 0, checked = 0;
     dvec dir = dnorm(dv(0.6, -0.3, 0.74));
-    double t0 = now_s();
+    double t0 = sys_now();
     (void)state;
     render_inv(R, 1, dv(0, 0, 0), &ref);
     render_inv(RF, 1, dv(0, 0, 0), &fref);
@@ -1959,7 +1947,7 @@ static void test_image_invariance(void **state)
     }
     printf("  image invariance: robust %ld of %ld transformed scenes fail, %ld NaN pixels; fast "
            "fails %ld of %ld (%.1f s)\n",
-           fails, checked, nan, fast_fails, checked, now_s() - t0);
+           fails, checked, nan, fast_fails, checked, sys_now() - t0);
     image_free(&ref);
     image_free(&fref);
     assert_int_equal(nan, 0);

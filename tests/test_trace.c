@@ -2,7 +2,7 @@
  * - the BVH: closest hit (renderer_intersect) and any hit (renderer_occluded) on random
  *   scenes of spheres, triangles, polygons and cones equal a brute-force loop over every
  *   primitive, run on the host with the kernels' own intersection functions
- *   (kernels/intersect.h compiles as C99);
+ *   (kernels/prim.h compiles as C99);
  * - refraction: a glass slab seen by an orthographic camera shifts a sharp edge by
  *   t sin(theta - theta_r) / cos(theta_r), the same at any distance (the rays leave
  *   parallel); total internal reflection in a prism sends the (km + kt)-weighted ray on;
