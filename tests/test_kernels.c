@@ -30,48 +30,20 @@ static int teardown(void **state)
 /* A camera at eye with basis x, y, z (w = +z), window [-1,1]^2, d = 1. */
 static void base_scene(scene *s, enum scene_projection proj, int w, int h)
 {
-    scene_init(s);
-    s->camera.projection = proj;
-    s->camera.eye = vec3f_make(0, 0, 10);
-    s->camera.u = vec3f_make(1, 0, 0);
-    s->camera.v = vec3f_make(0, 1, 0);
-    s->camera.w = vec3f_make(0, 0, 1);
-    s->camera.l = -1;
-    s->camera.r = 1;
-    s->camera.b = -1;
-    s->camera.t = 1;
-    s->camera.d = 1;
-    s->camera.dir = vec3f_make(0, 0, -1);
-    s->width = w;
-    s->height = h;
+    tu_base_scene(s, proj, 10, w, h);
 }
 
+/* No transmission, index 1. */
 static int add_material(scene *s, vec3f ka, vec3f kd, vec3f ks, vec3f km, float p)
 {
-    scene_material m;
-    memset(&m, 0, sizeof m);
-    m.ka = ka;
-    m.kd = kd;
-    m.ks = ks;
-    m.km = km;
-    m.p = p;
-    m.ior = 1;
-    return (int)scene_push(&s->materials, &m, sizeof m);
+    return tu_add_material(s, ka, kd, ks, km, vec3f_make(0, 0, 0), 1, p);
 }
 
-static void add_light(scene *s, vec3f pos, vec3f intensity)
-{
-    scene_light l;
-    l.position = pos;
-    l.intensity = intensity;
-    assert_true(scene_push(&s->lights, &l, sizeof l) >= 0);
-}
+#define add_light tu_add_light
 
 static void upload(scene *s)
 {
-    if (scene_finish(s, 0, 0, 0, err, sizeof err) != 0 ||
-        renderer_set_scene(R, s, err, sizeof err) != 0)
-        fail_msg("%s", err);
+    tu_upload(R, s);
 }
 
 static void assert_near(double got, double want, double tol, const char *what)

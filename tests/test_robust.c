@@ -281,23 +281,9 @@ static int hit_has_nan(const cw_hit *h)
 /* An empty scene with a valid camera and one white material (index 0). */
 static void base_scene(scene *s)
 {
-    scene_material m;
-    scene_init(s);
-    s->camera.projection = SCENE_PERSPECTIVE;
-    s->camera.eye = vec3f_make(0, 0, 10);
-    s->camera.u = vec3f_make(1, 0, 0);
-    s->camera.v = vec3f_make(0, 1, 0);
-    s->camera.w = vec3f_make(0, 0, 1);
-    s->camera.l = s->camera.b = -1;
-    s->camera.r = s->camera.t = 1;
-    s->camera.d = 1;
-    s->camera.dir = vec3f_make(0, 0, -1);
-    s->width = s->height = 1;
-    memset(&m, 0, sizeof m);
-    m.ka = m.kd = vec3f_make(1, 1, 1);
-    m.p = 1;
-    m.ior = 1;
-    assert_true(scene_push(&s->materials, &m, sizeof m) >= 0);
+    vec3f white = vec3f_make(1, 1, 1), black = vec3f_make(0, 0, 0);
+    tu_base_scene(s, SCENE_PERSPECTIVE, 10, 1, 1);
+    assert_true(tu_add_material(s, white, white, black, black, black, 1, 1) >= 0);
 }
 
 static void add_sphere(scene *s, dvec c, double r)

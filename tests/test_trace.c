@@ -93,20 +93,7 @@ static void settings(int spd, int stats, int precision)
 /* An orthographic camera at (0, 0, 20) looking down -z, window [-1,1]^2. */
 static void base_scene(scene *s, int w, int h)
 {
-    scene_init(s);
-    s->camera.projection = SCENE_ORTHOGRAPHIC;
-    s->camera.eye = vec3f_make(0, 0, 20);
-    s->camera.u = vec3f_make(1, 0, 0);
-    s->camera.v = vec3f_make(0, 1, 0);
-    s->camera.w = vec3f_make(0, 0, 1);
-    s->camera.l = -1;
-    s->camera.r = 1;
-    s->camera.b = -1;
-    s->camera.t = 1;
-    s->camera.d = 1;
-    s->camera.dir = vec3f_make(0, 0, -1);
-    s->width = w;
-    s->height = h;
+    tu_base_scene(s, SCENE_ORTHOGRAPHIC, 20, w, h);
 }
 
 static vec3f grey(float g)
@@ -114,20 +101,7 @@ static vec3f grey(float g)
     return vec3f_make(g, g, g);
 }
 
-static int add_material(scene *s, vec3f ka, vec3f kd, vec3f ks, vec3f km, vec3f kt, float ior,
-                        float p)
-{
-    scene_material m;
-    memset(&m, 0, sizeof m);
-    m.ka = ka;
-    m.kd = kd;
-    m.ks = ks;
-    m.km = km;
-    m.kt = kt;
-    m.ior = ior;
-    m.p = p;
-    return (int)scene_push(&s->materials, &m, sizeof m);
-}
+#define add_material tu_add_material
 
 /* ka only: with ambient light 1 and no lights a surface shows exactly its ka. */
 static int add_flat(scene *s, vec3f ka)
@@ -165,19 +139,11 @@ static void add_cone(scene *s, vec3f base, float r0, vec3f apex, float r1, int m
     assert_true(scene_push(&s->cones, &c, sizeof c) >= 0);
 }
 
-static void add_light(scene *s, vec3f pos, vec3f intensity)
-{
-    scene_light l;
-    l.position = pos;
-    l.intensity = intensity;
-    assert_true(scene_push(&s->lights, &l, sizeof l) >= 0);
-}
+#define add_light tu_add_light
 
 static void upload(scene *s)
 {
-    if (scene_finish(s, 0, 0, 0, err, sizeof err) != 0 ||
-        renderer_set_scene(R, s, err, sizeof err) != 0)
-        fail_msg("%s", err);
+    tu_upload(R, s);
 }
 
 static void render(image *img)

@@ -64,6 +64,58 @@ static inline void tu_add_polygon(scene *s, const vec3f *v, int n, int mat)
     assert_true(scene_push(&s->polygons, &p, sizeof p) >= 0);
 }
 
+/* The base scene of the kernel suites: a camera at (0, 0, eye_z) with basis x, y, z (w =
+ * +z, looking down -z), window [-1,1]^2, d = 1; w x h pixels; nothing else. */
+static inline void tu_base_scene(scene *s, enum scene_projection proj, float eye_z, int w, int h)
+{
+    scene_init(s);
+    s->camera.projection = proj;
+    s->camera.eye = vec3f_make(0, 0, eye_z);
+    s->camera.u = vec3f_make(1, 0, 0);
+    s->camera.v = vec3f_make(0, 1, 0);
+    s->camera.w = vec3f_make(0, 0, 1);
+    s->camera.l = -1;
+    s->camera.r = 1;
+    s->camera.b = -1;
+    s->camera.t = 1;
+    s->camera.d = 1;
+    s->camera.dir = vec3f_make(0, 0, -1);
+    s->width = w;
+    s->height = h;
+}
+
+/* Appends a material; returns its index. */
+static inline int tu_add_material(scene *s, vec3f ka, vec3f kd, vec3f ks, vec3f km, vec3f kt,
+                                  float ior, float p)
+{
+    scene_material m;
+    memset(&m, 0, sizeof m);
+    m.ka = ka;
+    m.kd = kd;
+    m.ks = ks;
+    m.km = km;
+    m.kt = kt;
+    m.ior = ior;
+    m.p = p;
+    return (int)scene_push(&s->materials, &m, sizeof m);
+}
+
+static inline void tu_add_light(scene *s, vec3f pos, vec3f intensity)
+{
+    scene_light l;
+    l.position = pos;
+    l.intensity = intensity;
+    assert_true(scene_push(&s->lights, &l, sizeof l) >= 0);
+}
+
+/* Finishes s at its own size and uploads it to r; a failure fails the test. */
+static inline void tu_upload(renderer *r, scene *s)
+{
+    char e[2048];
+    if (scene_finish(s, 0, 0, 0, e, sizeof e) != 0 || renderer_set_scene(r, s, e, sizeof e) != 0)
+        fail_msg("%s", e);
+}
+
 /* The renderer fixture of the kernel suites: a renderer on the default device (PoCL),
  * made before the group (printing "device: NAME" when show_device is set) and destroyed
  * after it. Returns 0, or -1 with the reason on stderr (the group then fails). */
