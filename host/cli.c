@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli_num.h"
 #include "config.h"
 #include "version.h"
 
@@ -100,11 +101,8 @@ static void version(void)
 
 static int parse_int(const char *opt, const char *s, int lo, int hi, int *out)
 {
-    char *end;
     long v;
-    errno = 0;
-    v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi) {
+    if (cli_parse_long(s, lo, hi, &v) != 0) {
         fprintf(stderr, "clwhitted: %s expects an integer in %d..%d, got '%s'\n" CLI_HINT, opt, lo,
                 hi, s);
         return -1;
@@ -115,16 +113,11 @@ static int parse_int(const char *opt, const char *s, int lo, int hi, int *out)
 
 static int parse_double(const char *opt, const char *s, double lo, double hi, double *out)
 {
-    char *end;
-    double v;
-    errno = 0;
-    v = strtod(s, &end);
-    if (errno || end == s || *end || !(v >= lo && v <= hi)) {
+    if (cli_parse_double(s, lo, hi, out) != 0) {
         fprintf(stderr, "clwhitted: %s expects a number in %g..%g, got '%s'\n" CLI_HINT, opt, lo,
                 hi, s);
         return -1;
     }
-    *out = v;
     return 0;
 }
 

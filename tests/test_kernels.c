@@ -167,21 +167,7 @@ static void test_camera_oblique(void **state)
 
 /* ---- intersection ----------------------------------------------------------------- */
 
-static cw_ray make_ray(double ox, double oy, double oz, double dx, double dy, double dz)
-{
-    cw_ray r;
-    double n = sqrt(dx * dx + dy * dy + dz * dz);
-    memset(&r, 0, sizeof r);
-    r.origin.x = (float)ox;
-    r.origin.y = (float)oy;
-    r.origin.z = (float)oz;
-    r.dir.x = (float)(dx / n);
-    r.dir.y = (float)(dy / n);
-    r.dir.z = (float)(dz / n);
-    r.weight.x = r.weight.y = r.weight.z = 1;
-    r.depth = 1;
-    return r;
-}
+#define make_ray tu_make_ray
 
 static void trace(scene *s, cw_ray *rays, int n, cw_hit *hits)
 {

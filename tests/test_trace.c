@@ -158,21 +158,7 @@ static void assert_near(double got, double want, double tol, const char *what)
         fail_msg("%s: got %.9g, want %.9g (tolerance %g)", what, got, want, tol);
 }
 
-static cw_ray make_ray(double ox, double oy, double oz, double dx, double dy, double dz)
-{
-    cw_ray r;
-    double n = sqrt(dx * dx + dy * dy + dz * dz);
-    memset(&r, 0, sizeof r);
-    r.origin.x = (float)ox;
-    r.origin.y = (float)oy;
-    r.origin.z = (float)oz;
-    r.dir.x = (float)(dx / n);
-    r.dir.y = (float)(dy / n);
-    r.dir.z = (float)(dz / n);
-    r.weight.x = r.weight.y = r.weight.z = 1;
-    r.depth = 1;
-    return r;
-}
+#define make_ray tu_make_ray
 
 static void intersect(cw_ray *rays, int n, cw_hit *hits)
 {

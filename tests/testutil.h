@@ -8,12 +8,14 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "render.h"
 #include "scene.h"
 #include "scene_geom.h"
+#include "types.h"
 
 /* splitmix64: the same random numbers on every machine. */
 static uint64_t tu_rng_state;
@@ -62,6 +64,23 @@ static inline void tu_add_polygon(scene *s, const vec3f *v, int n, int mat)
     for (i = 0; i < n; i++)
         assert_true(scene_push(&s->poly_verts, &v[i], sizeof v[i]) >= 0);
     assert_true(scene_push(&s->polygons, &p, sizeof p) >= 0);
+}
+
+/* An eye ray (depth 1, weight 1, no skip) from o along d (normalised here, in double). */
+static inline cw_ray tu_make_ray(double ox, double oy, double oz, double dx, double dy, double dz)
+{
+    cw_ray r;
+    double n = sqrt(dx * dx + dy * dy + dz * dz);
+    memset(&r, 0, sizeof r);
+    r.origin.x = (float)ox;
+    r.origin.y = (float)oy;
+    r.origin.z = (float)oz;
+    r.dir.x = (float)(dx / n);
+    r.dir.y = (float)(dy / n);
+    r.dir.z = (float)(dz / n);
+    r.weight.x = r.weight.y = r.weight.z = 1;
+    r.depth = 1;
+    return r;
 }
 
 /* The base scene of the kernel suites: a camera at (0, 0, eye_z) with basis x, y, z (w =

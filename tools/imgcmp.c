@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli_num.h"
 #include "image.h"
 #include "image_diff.h"
 #include "image_read.h"
@@ -44,19 +45,14 @@ static void usage(FILE *f)
 
 static int parse_double(const char *opt, const char *s, double lo, double hi, double *out)
 {
-    char *end;
-    double v;
     if (!s) {
         fprintf(stderr, "imgcmp: %s needs a value\n", opt);
         return -1;
     }
-    errno = 0;
-    v = strtod(s, &end);
-    if (errno || end == s || *end || !(v >= lo && v <= hi)) {
+    if (cli_parse_double(s, lo, hi, out) != 0) {
         fprintf(stderr, "imgcmp: %s expects a number in [%g, %g], got '%s'\n", opt, lo, hi, s);
         return -1;
     }
-    *out = v;
     return 0;
 }
 

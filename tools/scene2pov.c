@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli_num.h"
 #include "config.h"
 #include "scene.h"
 #include "scene_load.h"
@@ -31,15 +32,12 @@ static void usage(FILE *f)
 
 static int parse_int(const char *opt, const char *s, int lo, int hi, int *out)
 {
-    char *end;
     long v;
     if (!s) {
         fprintf(stderr, "scene2pov: %s needs a value\n", opt);
         return -1;
     }
-    errno = 0;
-    v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi) {
+    if (cli_parse_long(s, lo, hi, &v) != 0) {
         fprintf(stderr, "scene2pov: %s expects an integer in %d..%d, got '%s'\n", opt, lo, hi, s);
         return -1;
     }
