@@ -12,20 +12,8 @@
 #include "render_debug.h"
 #include "scene.h"
 
-static renderer *R;
+TU_RENDERER_FIXTURE(1)
 static char err[2048];
-
-static int setup(void **state)
-{
-    (void)state;
-    return tu_renderer_open(&R, 1);
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    return tu_renderer_close(&R);
-}
 
 /* A camera at eye with basis x, y, z (w = +z), window [-1,1]^2, d = 1. */
 static void base_scene(scene *s, enum scene_projection proj, int w, int h)

@@ -24,20 +24,8 @@
 #define MAX_OVER_FRACTION 0.001
 #define MAX_MEAN 1e-4
 
-static renderer *R;
+TU_RENDERER_FIXTURE(0)
 static char err[2048];
-
-static int setup(void **state)
-{
-    (void)state;
-    return tu_renderer_open(&R, 0);
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    return tu_renderer_close(&R);
-}
 
 static void regress(const char *scene_path, const char *name, int w, int h, int depth)
 {

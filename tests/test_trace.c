@@ -28,20 +28,8 @@
 
 #define PI 3.14159265358979323846
 
-static renderer *R;
+TU_RENDERER_FIXTURE(1)
 static char err[2048];
-
-static int setup(void **state)
-{
-    (void)state;
-    return tu_renderer_open(&R, 1);
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    return tu_renderer_close(&R);
-}
 
 /* ======================================================================================== */
 /* Helpers                                                                                  */

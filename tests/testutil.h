@@ -157,4 +157,19 @@ static inline int tu_renderer_close(renderer **r)
     return 0;
 }
 
+/* A suite's group fixture: defines `static renderer *R` and the cmocka group functions
+ * setup() and teardown() that open and close it (tu_renderer_open). */
+#define TU_RENDERER_FIXTURE(show_device)                                                           \
+    static renderer *R;                                                                            \
+    static int setup(void **state)                                                                 \
+    {                                                                                              \
+        (void)state;                                                                               \
+        return tu_renderer_open(&R, show_device);                                                  \
+    }                                                                                              \
+    static int teardown(void **state)                                                              \
+    {                                                                                              \
+        (void)state;                                                                               \
+        return tu_renderer_close(&R);                                                              \
+    }
+
 #endif
