@@ -5,6 +5,7 @@
 #   make install  install clwhitted and its man page (PREFIX, BINDIR, MANDIR, DESTDIR)
 #   make gallery  render build/gallery/ (the SPD scenes from SPD_DIR and the default scene);
 #                 UPDATE_DOCS=1 also copies it over docs/gallery/
+#   make bench    clwhitted, the Embree anchor and POV-Ray side by side (docs/benchmarks.md)
 #   make format   clang-format the C sources; make format-check checks them (CI)
 
 CC      ?= cc
@@ -97,6 +98,7 @@ test: $(BUILD)/clwhitted $(TEST_BIN)
 	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \
 	sh tests/quality.sh $(BUILD)/clwhitted $(BUILD)/imgtool || fail=1; \
 	sh tests/docs.sh $(BUILD)/clwhitted || fail=1; \
+	sh tests/bench.sh $(BUILD) || fail=1; \
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
 
 # The installed binary needs nothing else at run time: the kernels are embedded.
@@ -121,9 +123,30 @@ endif
 FORMAT_SRC = host/*.c host/*.h kernels/*.h kernels/*.cl tests/*.c tests/*.h tests/fuzz/*.c \
              tests/fuzz/*.h tools/*.c
 
-# Speed against POV-Ray on the SPD scenes (tools/bench --help); not part of make test.
-bench: $(BUILD)/clwhitted $(BUILD)/scene2pov
-	tools/bench $(BENCH_ARGS)
+# ---- Benchmark (tools/bench --help; docs/benchmarks.md) -----------------------------------
+# The speed anchor: a plain Embree 3 Whitted tracer of the same model, built from the shared
+# folder (which may be read-only) into build/. Needs libembree-dev and libpng-dev.
+SHARED_DIR    ?= ../shared
+ANCHOR_DIR    ?= $(SHARED_DIR)/anchors/embree-whitted
+ANCHOR_CFLAGS ?= -O2 -march=native
+$(BUILD)/embree-anchor: $(wildcard $(ANCHOR_DIR)/embree_anchor.c) | $(BUILD)
+	@[ -f '$(ANCHOR_DIR)/embree_anchor.c' ] || { echo "embree-anchor: \
+	$(ANCHOR_DIR)/embree_anchor.c not found (set ANCHOR_DIR or SHARED_DIR)" >&2; exit 1; }
+	@echo '#include <embree3/rtcore.h>' | $(CC) -E -x c - >/dev/null 2>&1 || { echo \
+	"embree-anchor: libembree-dev is not installed (sh tools/install-deps)" >&2; exit 1; }
+	$(CC) $(ANCHOR_CFLAGS) '$(ANCHOR_DIR)/embree_anchor.c' -o $@ -lembree3 -lpng -lpthread -lm
+
+# clwhitted, the anchor and POV-Ray side by side: the SPD scenes at 512x512 and 2048x2048,
+# per-phase fixed costs, and the scaling table over generated scenes (build/bench/gen/).
+# Not part of make test (which runs tests/bench.sh, a smoke run). BENCH_ARGS passes options
+# (BENCH_ARGS=--no-anchor runs without the anchor); results go to build/bench/, and with
+# UPDATE_DOCS=1 also into the generated section of docs/benchmarks.md.
+bench: $(BUILD)/clwhitted $(BUILD)/scene2pov \
+       $(if $(filter --no-anchor,$(BENCH_ARGS)),,$(BUILD)/embree-anchor)
+	tools/bench --anchor $(BUILD)/embree-anchor $(BENCH_ARGS) \
+	    $(if $(filter 1,$(UPDATE_DOCS)),--update-docs docs/benchmarks.md)
+# tests/bench.sh runs POV-Ray through scene2pov, and the anchor where its source is here.
+test: $(BUILD)/scene2pov $(if $(wildcard $(ANCHOR_DIR)/embree_anchor.c),$(BUILD)/embree-anchor)
 
 # SPD ray counts against POV-Ray tracing the same corner rays.
 spd-counts: $(BUILD)/clwhitted $(BUILD)/scene2pov
