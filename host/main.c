@@ -1,5 +1,8 @@
 /* clwhitted: the batch front end. main() parses the command line (cli.c), loads the scene,
- * then either opens the preview (preview.c) or renders once and writes the image. */
+ * then either opens the preview (preview.c) or renders once and writes the image. A batch
+ * render starts OpenCL (platform, device, context, queue) on a second thread while the
+ * scene loads, and a successful one ends without tearing anything down. */
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,10 +18,70 @@
 #include "sys.h"
 #include "version.h"
 
+/* Full teardown at exit only where a leak checker looks: sanitizer builds (LeakSanitizer
+ * checks at exit) or -DCW_FULL_TEARDOWN=1. Otherwise a successful batch render ends with
+ * sys_exit_now: the scene, the image and the renderer are not freed, the OpenCL objects not
+ * released, and the libraries' exit-time destructors (PoCL's, LLVM's) do not run. */
+#ifndef CW_FULL_TEARDOWN
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_LEAK__)
+#define CW_FULL_TEARDOWN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(leak_sanitizer)
+#define CW_FULL_TEARDOWN 1
+#endif
+#endif
+#endif
+#ifndef CW_FULL_TEARDOWN
+#define CW_FULL_TEARDOWN 0
+#endif
+
 /* Times of the phases of a batch render, from sys_now(). */
 typedef struct {
     double start, loaded, set_up, rendered, written;
 } batch_times;
+
+/* The OpenCL start-up of a batch render (renderer_create, renderer_set_settings), run on
+ * a thread of its own while the scene loads, or in device_start_end when no thread could
+ * be started. Its error, if any, is reported only once the scene has loaded, as when it
+ * ran after the load. */
+typedef struct {
+    const cli_options *o;
+    renderer *r; /* NULL until created */
+    int rc;      /* 0, or -1 with err */
+    char err[2048];
+    pthread_t tid;
+    int threaded, done;
+} device_start;
+
+static void *device_start_main(void *arg)
+{
+    device_start *d = arg;
+    d->rc = -1;
+    if (renderer_create(&d->r, d->o->device, d->err, sizeof d->err) == 0 &&
+        renderer_set_settings(d->r, &d->o->settings, d->err, sizeof d->err) == 0)
+        d->rc = 0;
+    return NULL;
+}
+
+static void device_start_begin(device_start *d, const cli_options *o)
+{
+    memset(d, 0, sizeof *d);
+    d->o = o;
+    d->threaded = pthread_create(&d->tid, NULL, device_start_main, d) == 0;
+}
+
+/* Waits for the start-up (or runs it). Returns 0, or -1 with d->err. */
+static int device_start_end(device_start *d)
+{
+    if (!d->done) {
+        if (d->threaded)
+            pthread_join(d->tid, NULL);
+        else
+            device_start_main(d);
+        d->done = 1;
+    }
+    return d->rc;
+}
 
 /* Prints an error, clearing the progress line first. */
 static void fail_msg(progress_bar *bar, const char *msg)
@@ -92,20 +155,27 @@ static void report(const cli_options *o, const scene *s, const renderer *r, cons
     }
 }
 
-/* Renders the finished scene s once and writes it to o->output (or the default name).
+/* What a batch render holds until the end of the process. */
+typedef struct {
+    scene s;
+    device_start dev;
+    image img;
+    char *default_out;
+} batch;
+
+/* Renders the finished scene b->s once and writes it to o->output (or the default name).
  * Returns the exit status. */
-static int render_batch(cli_options *o, const scene *s, progress_bar *bar, batch_times *t)
+static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times *t)
 {
     char err[2048], title[256], software[64], settings[256];
-    char *default_out = NULL;
     const char *output = o->output;
-    renderer *r = NULL;
-    image img = {0, 0, NULL};
+    const scene *s = &b->s;
+    renderer *r;
     render_stats st;
     double trace_s;
-    int is_exr, rc = 1;
+    int is_exr;
 
-    if (!output && !(output = default_out = default_output(s))) {
+    if (!output && !(output = b->default_out = default_output(s))) {
         fprintf(stderr, "clwhitted: out of memory\n");
         return 1;
     }
@@ -119,19 +189,22 @@ static int render_batch(cli_options *o, const scene *s, progress_bar *bar, batch
     }
     t->loaded = sys_now();
     progress_status(bar, "building the kernels ...");
-    if (renderer_create(&r, o->device, err, sizeof err) != 0 ||
-        renderer_set_settings(r, &o->settings, err, sizeof err) != 0 ||
-        renderer_set_scene(r, s, err, sizeof err) != 0) {
+    if (device_start_end(&b->dev) != 0) {
+        fail_msg(bar, b->dev.err);
+        return 1;
+    }
+    r = b->dev.r;
+    if (renderer_set_scene(r, s, err, sizeof err) != 0) {
         fail_msg(bar, err);
-        goto out_destroy;
+        return 1;
     }
     t->set_up = sys_now();
     renderer_set_progress(r, progress_update, bar);
     progress_begin(bar);
     progress_update(bar, 0.0, 0);
-    if (renderer_render(r, &img, err, sizeof err) != 0) {
+    if (renderer_render(r, &b->img, err, sizeof err) != 0) {
         fail_msg(bar, err);
-        goto out_destroy;
+        return 1;
     }
     progress_clear(bar);
     t->rendered = sys_now();
@@ -139,18 +212,41 @@ static int render_batch(cli_options *o, const scene *s, progress_bar *bar, batch
     trace_s = st.trace_s > 0 ? st.trace_s : t->rendered - t->set_up;
     set_metadata(o, s, r, is_exr, trace_s, &o->write, title, sizeof title, software,
                  sizeof software, settings, sizeof settings);
-    if (image_write_ex(&img, output, &o->write, err, sizeof err) != 0) {
+    if (image_write_ex(&b->img, output, &o->write, err, sizeof err) != 0) {
         fprintf(stderr, "clwhitted: %s\n", err);
-        goto out_free_image;
+        return 1;
     }
     t->written = sys_now();
     report(o, s, r, output, t, &st, trace_s);
-    rc = 0;
-out_free_image:
-    image_free(&img);
-out_destroy:
-    renderer_destroy(r);
-    free(default_out);
+    return 0;
+}
+
+/* Loads the scene while OpenCL starts, renders it, and ends the process (see
+ * CW_FULL_TEARDOWN). Returns the exit status. */
+static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
+{
+    char err[2048];
+    batch b;
+    int rc = 1;
+
+    memset(&b, 0, sizeof b);
+    device_start_begin(&b.dev, o);
+    scene_init(&b.s);
+    progress_status(bar, "loading the scene ...");
+    if (scene_load(o->scene, &b.s, err, sizeof err) != 0 ||
+        scene_finish(&b.s, o->width, o->height, o->depth, err, sizeof err) != 0)
+        fail_msg(bar, err);
+    else {
+        progress_clear(bar);
+        rc = render_batch(o, &b, bar, t);
+    }
+    if (rc == 0 && !CW_FULL_TEARDOWN)
+        sys_exit_now(0);
+    device_start_end(&b.dev); /* a failed load waits for the start-up to finish */
+    renderer_destroy(b.dev.r);
+    image_free(&b.img);
+    free(b.default_out);
+    scene_free(&b.s);
     return rc;
 }
 
@@ -175,22 +271,19 @@ int main(int argc, char **argv)
     progress_init(&bar, stderr,
                   progress_wanted(o.quiet, getenv("CLWHITTED_PROGRESS"), isatty(STDERR_FILENO)));
     t.start = sys_now();
+    if (!o.preview)
+        return run_batch(&o, &bar, &t);
     scene_init(&s);
     progress_status(&bar, "loading the scene ...");
     if (scene_load(o.scene, &s, err, sizeof err) != 0 ||
         scene_finish(&s, o.width, o.height, o.depth, err, sizeof err) != 0) {
         fail_msg(&bar, err);
         rc = 1;
-        goto out_free_scene;
-    }
-    progress_clear(&bar);
-    if (o.preview) {
-        preview_options po = {o.device, o.settings, o.preview_script, o.quiet};
-        rc = preview_run(&s, &po);
     } else {
-        rc = render_batch(&o, &s, &bar, &t);
+        preview_options po = {o.device, o.settings, o.preview_script, o.quiet};
+        progress_clear(&bar);
+        rc = preview_run(&s, &po);
     }
-out_free_scene:
     scene_free(&s);
     return rc;
 }
