@@ -1,7 +1,7 @@
 /* clwhitted: the batch front end. main() parses the command line (cli.c), loads the scene,
  * then either opens the preview (preview.c) or renders once and writes the image. A batch
- * render starts OpenCL (platform, device, context, queue) on a second thread while the
- * scene loads, and a successful one ends without tearing anything down. */
+ * render loads the scene on a second thread while OpenCL starts (platform, device,
+ * context, queue), and a successful one ends without tearing anything down. */
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,47 +40,51 @@ typedef struct {
     double start, loaded, set_up, rendered, written;
 } batch_times;
 
-/* The OpenCL start-up of a batch render (renderer_create, renderer_set_settings), run on
- * a thread of its own while the scene loads, or in device_start_end when no thread could
- * be started. Its error, if any, is reported only once the scene has loaded, as when it
- * ran after the load. */
+/* The scene load of a batch render (scene_load, scene_finish), on a thread of its own
+ * while the main thread starts OpenCL, or on the main thread before it when no thread can
+ * be started. OpenCL starts on the main thread because LLVM, inside PoCL, sets up its
+ * signal handling there (AddressSanitizer cannot free an LLVM alternate signal stack when
+ * the thread that set it exits). */
 typedef struct {
     const cli_options *o;
-    renderer *r; /* NULL until created */
-    int rc;      /* 0, or -1 with err */
+    scene *s;
+    int rc; /* 0, or -1 with err */
     char err[2048];
+    double done_at; /* sys_now() at the end */
     pthread_t tid;
-    int threaded, done;
-} device_start;
+    int threaded;
+} scene_job;
 
-static void *device_start_main(void *arg)
+static void *scene_job_main(void *arg)
 {
-    device_start *d = arg;
-    d->rc = -1;
-    if (renderer_create(&d->r, d->o->device, d->err, sizeof d->err) == 0 &&
-        renderer_set_settings(d->r, &d->o->settings, d->err, sizeof d->err) == 0)
-        d->rc = 0;
+    scene_job *j = arg;
+    const cli_options *o = j->o;
+    j->rc = scene_load(o->scene, j->s, j->err, sizeof j->err) != 0 ||
+                    scene_finish(j->s, o->width, o->height, o->depth, j->err, sizeof j->err) != 0
+                ? -1
+                : 0;
+    j->done_at = sys_now();
     return NULL;
 }
 
-static void device_start_begin(device_start *d, const cli_options *o)
+/* Starts the load, or does it now when no thread can be started. */
+static void scene_job_begin(scene_job *j, const cli_options *o, scene *s)
 {
-    memset(d, 0, sizeof *d);
-    d->o = o;
-    d->threaded = pthread_create(&d->tid, NULL, device_start_main, d) == 0;
+    memset(j, 0, sizeof *j);
+    j->o = o;
+    j->s = s;
+    j->threaded = pthread_create(&j->tid, NULL, scene_job_main, j) == 0;
+    if (!j->threaded)
+        scene_job_main(j);
 }
 
-/* Waits for the start-up (or runs it). Returns 0, or -1 with d->err. */
-static int device_start_end(device_start *d)
+/* Waits for the load. Returns 0, or -1 with j->err. */
+static int scene_job_end(scene_job *j)
 {
-    if (!d->done) {
-        if (d->threaded)
-            pthread_join(d->tid, NULL);
-        else
-            device_start_main(d);
-        d->done = 1;
-    }
-    return d->rc;
+    if (j->threaded)
+        pthread_join(j->tid, NULL);
+    j->threaded = 0;
+    return j->rc;
 }
 
 /* Prints an error, clearing the progress line first. */
@@ -158,7 +162,9 @@ static void report(const cli_options *o, const scene *s, const renderer *r, cons
 /* What a batch render holds until the end of the process. */
 typedef struct {
     scene s;
-    device_start dev;
+    renderer *r; /* NULL until created */
+    int r_rc;    /* renderer_create and renderer_set_settings: 0, or -1 with r_err */
+    char r_err[2048];
     image img;
     char *default_out;
 } batch;
@@ -187,13 +193,12 @@ static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times
         if (!is_exr && o->write.half)
             fprintf(stderr, "clwhitted: warning: --half applies to EXR output only\n");
     }
-    t->loaded = sys_now();
     progress_status(bar, "building the kernels ...");
-    if (device_start_end(&b->dev) != 0) {
-        fail_msg(bar, b->dev.err);
+    if (b->r_rc != 0) {
+        fail_msg(bar, b->r_err);
         return 1;
     }
-    r = b->dev.r;
+    r = b->r;
     if (renderer_set_scene(r, s, err, sizeof err) != 0) {
         fail_msg(bar, err);
         return 1;
@@ -222,28 +227,33 @@ static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times
 }
 
 /* Loads the scene while OpenCL starts, renders it, and ends the process (see
- * CW_FULL_TEARDOWN). Returns the exit status. */
+ * CW_FULL_TEARDOWN). Errors come in the order of the steps: the scene's, then the
+ * device's. Returns the exit status. */
 static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
 {
-    char err[2048];
+    scene_job load;
     batch b;
     int rc = 1;
 
     memset(&b, 0, sizeof b);
-    device_start_begin(&b.dev, o);
     scene_init(&b.s);
     progress_status(bar, "loading the scene ...");
-    if (scene_load(o->scene, &b.s, err, sizeof err) != 0 ||
-        scene_finish(&b.s, o->width, o->height, o->depth, err, sizeof err) != 0)
-        fail_msg(bar, err);
-    else {
+    scene_job_begin(&load, o, &b.s);
+    if (load.threaded || load.rc == 0) /* without a thread, a failed load ends it here */
+        b.r_rc = renderer_create(&b.r, o->device, b.r_err, sizeof b.r_err) == 0 &&
+                         renderer_set_settings(b.r, &o->settings, b.r_err, sizeof b.r_err) == 0
+                     ? 0
+                     : -1;
+    if (scene_job_end(&load) != 0) {
+        fail_msg(bar, load.err);
+    } else {
+        t->loaded = load.done_at;
         progress_clear(bar);
         rc = render_batch(o, &b, bar, t);
     }
     if (rc == 0 && !CW_FULL_TEARDOWN)
         sys_exit_now(0);
-    device_start_end(&b.dev); /* a failed load waits for the start-up to finish */
-    renderer_destroy(b.dev.r);
+    renderer_destroy(b.r);
     image_free(&b.img);
     free(b.default_out);
     scene_free(&b.s);
