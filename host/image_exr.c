@@ -199,10 +199,7 @@ typedef struct {
     size_t elem, line_bytes; /* bytes per value and per row */
     exr_slot *slot;
     int window;
-    int failed;              /* the slot of the first failure, + 1 */
-    const char *bad_channel; /* a channel we do not write (then failed is set too) */
-    exr_result_t rv;
-    const char *what;
+    const char *bad_channel; /* a channel we do not write, when a job found one */
 } exr_chunks;
 
 static int exr_slot_fail(exr_slot *sl, exr_result_t rv, const char *what)
@@ -288,12 +285,15 @@ static exr_result_t exr_write_chunks(exr_chunks *x, int32_t chunks, const char *
         *what = "allocating the encoders";
         return EXR_ERR_OUT_OF_MEMORY;
     }
-    if (par_ordered(chunks, threads, x->window, exr_chunk_job, exr_chunk_emit, x) != 0)
-        for (i = 0; i < x->window; i++)
-            if (x->slot[i].rv != EXR_ERR_SUCCESS && rv == EXR_ERR_SUCCESS) {
+    if (par_ordered(chunks, threads, x->window, exr_chunk_job, exr_chunk_emit, x) != 0) {
+        rv = EXR_ERR_UNKNOWN;
+        *what = "writing the chunks";
+        for (i = x->window - 1; i >= 0; i--) /* the failed slot (any one, if several) */
+            if (x->slot[i].rv != EXR_ERR_SUCCESS) {
                 rv = x->slot[i].rv;
                 *what = x->slot[i].what;
             }
+    }
     *bad_channel = x->bad_channel;
     for (i = 0; i < x->window; i++)
         if (x->slot[i].ready)

@@ -137,11 +137,21 @@ static int png_write_head(FILE *fp, int w, int h, const png_meta *m, image_png_e
     return 0;
 }
 
-/* One thread's deflate stream and piece of filtered rows; one slot's compressed piece. */
+/* A failure (on the thread that met it): PNG_ERR_*, the zlib code, the errno. */
+#define PNG_ERR_MEMORY 1
+#define PNG_ERR_ZLIB 2
+#define PNG_ERR_WRITE 3
+typedef struct {
+    int kind, zerr, werr;
+} png_err;
+
+/* One thread's deflate stream, piece of filtered rows and failure; one slot's compressed
+ * piece. */
 typedef struct {
     z_stream z;
     int z_ready;
     unsigned char *rows;
+    png_err err;
 } png_thread;
 
 typedef struct {
@@ -151,10 +161,7 @@ typedef struct {
     size_t raw_bytes; /* filtered rows in the piece */
 } png_slot;
 
-/* The pixel compression of one image (PNG_ERR_* in err_kind on failure). */
-#define PNG_ERR_MEMORY 1
-#define PNG_ERR_ZLIB 2
-#define PNG_ERR_WRITE 3
+/* The pixel compression of one image. */
 typedef struct {
     const image *img;
     image_srgb8_table srgb;
@@ -167,8 +174,15 @@ typedef struct {
     int window;
     FILE *fp;
     uLong adler; /* of the rows emitted so far */
-    int err_kind, zerr, werr;
 } png_pixels;
+
+static int png_fail(png_err *e, int kind, int zerr)
+{
+    e->kind = kind;
+    e->zerr = zerr;
+    e->werr = kind == PNG_ERR_WRITE ? (errno ? errno : EIO) : 0;
+    return kind;
+}
 
 /* Compresses piece j: its rows in sRGB, filter type 0, deflated into slot j % window. */
 static int png_piece_job(void *ctx, int j, int thread)
@@ -181,18 +195,15 @@ static int png_piece_job(void *ctx, int j, int thread)
     size_t raw = (size_t)n * p->row_bytes, bound;
 
     if (!t->rows && !(t->rows = malloc((size_t)p->rows * p->row_bytes)))
-        return p->err_kind = PNG_ERR_MEMORY;
+        return png_fail(&t->err, PNG_ERR_MEMORY, 0);
     if (!t->z_ready) {
         /* raw deflate (no zlib header or trailer: those are written around the pieces) */
         zr = deflateInit2(&t->z, PNG_ZLIB_LEVEL, Z_DEFLATED, -15, 8, Z_DEFAULT_STRATEGY);
-        if (zr != Z_OK) {
-            p->zerr = zr;
-            return p->err_kind = zr == Z_MEM_ERROR ? PNG_ERR_MEMORY : PNG_ERR_ZLIB;
-        }
+        if (zr != Z_OK)
+            return png_fail(&t->err, zr == Z_MEM_ERROR ? PNG_ERR_MEMORY : PNG_ERR_ZLIB, zr);
         t->z_ready = 1;
     } else if ((zr = deflateReset(&t->z)) != Z_OK) {
-        p->zerr = zr;
-        return p->err_kind = PNG_ERR_ZLIB;
+        return png_fail(&t->err, PNG_ERR_ZLIB, zr);
     }
     for (y = 0; y < n; y++) {
         unsigned char *row = t->rows + (size_t)y * p->row_bytes;
@@ -206,7 +217,7 @@ static int png_piece_job(void *ctx, int j, int thread)
         free(sl->out);
         sl->cap = 0;
         if (!(sl->out = malloc(bound)))
-            return p->err_kind = PNG_ERR_MEMORY;
+            return png_fail(&t->err, PNG_ERR_MEMORY, 0);
         sl->cap = bound;
     }
     t->z.next_in = t->rows;
@@ -214,10 +225,8 @@ static int png_piece_job(void *ctx, int j, int thread)
     t->z.next_out = sl->out;
     t->z.avail_out = (uInt)sl->cap;
     zr = deflate(&t->z, last ? Z_FINISH : Z_SYNC_FLUSH);
-    if ((last ? zr != Z_STREAM_END : zr != Z_OK) || t->z.avail_in != 0 || t->z.avail_out == 0) {
-        p->zerr = zr;
-        return p->err_kind = PNG_ERR_ZLIB;
-    }
+    if ((last ? zr != Z_STREAM_END : zr != Z_OK) || t->z.avail_in != 0 || t->z.avail_out == 0)
+        return png_fail(&t->err, PNG_ERR_ZLIB, zr);
     sl->len = sl->cap - t->z.avail_out;
     sl->adler = adler32(adler32(0L, Z_NULL, 0), t->rows, (uInt)raw);
     sl->raw_bytes = raw;
@@ -257,9 +266,8 @@ static int png_put_chunk(png_pixels *p, const char *type, const unsigned char *c
     if (fwrite(tail, 1, 4, p->fp) != 4)
         goto fail;
     return 0;
-fail:
-    p->werr = errno ? errno : EIO;
-    return p->err_kind = PNG_ERR_WRITE;
+fail: /* on the calling thread, thread 0 */
+    return png_fail(&p->th[0].err, PNG_ERR_WRITE, 0);
 }
 
 /* Writes piece j as an IDAT chunk: the zlib header before the first piece, the Adler-32 of
@@ -283,11 +291,13 @@ static int png_piece_emit(void *ctx, int j)
     return png_put_chunk(p, "IDAT", part, len, 3);
 }
 
-/* Compresses and writes the pixels, then IEND. Returns 0, or -1 with err. */
+/* Compresses and writes the pixels to fp (the temporary file tmp), then IEND. Returns 0,
+ * or -1 with err. */
 static int png_write_pixels(const image *img, const image_write_opts *o, FILE *fp, const char *path,
-                            char *err, size_t errlen)
+                            const char *tmp, char *err, size_t errlen)
 {
     png_pixels p;
+    png_err e = {0, 0, 0};
     int threads, i, rc;
     size_t rows;
 
@@ -324,12 +334,14 @@ static int png_write_pixels(const image *img, const image_write_opts *o, FILE *f
     free(p.slot);
     if (rc == 0)
         return 0;
-    if (p.err_kind == PNG_ERR_MEMORY)
+    for (i = 0; i < CW_MAX_WRITE_THREADS && !e.kind; i++)
+        e = p.th[i].err;
+    if (e.kind == PNG_ERR_MEMORY)
         image_set_err(err, errlen, "%s: out of memory", path);
-    else if (p.err_kind == PNG_ERR_ZLIB)
-        image_set_err(err, errlen, "%s: PNG encoding failed: zlib error %d", path, p.zerr);
+    else if (e.kind == PNG_ERR_ZLIB)
+        image_set_err(err, errlen, "%s: PNG encoding failed: zlib error %d", path, e.zerr);
     else
-        image_set_err(err, errlen, "%s: writing failed: %s", path, strerror(p.werr));
+        image_set_err(err, errlen, "%s: writing %s failed: %s", path, tmp, strerror(e.werr));
     return -1;
 }
 
@@ -365,7 +377,7 @@ int image_png_write(const image *img, const char *path, const image_write_opts *
         image_set_err(err, errlen, "%s: PNG encoding failed: %s", path,
                       e.msg[0] ? e.msg : "libpng error");
     else
-        rc = png_write_pixels(img, o, fp, path, err, errlen);
+        rc = png_write_pixels(img, o, fp, path, t.tmp, err, errlen);
     werr = 0;
     if (rc == 0 && fflush(fp) != 0)
         werr = errno ? errno : EIO;
