@@ -9,7 +9,8 @@
 /* Seconds on the monotonic clock (for durations only). */
 double sys_now(void);
 
-/* The number of online CPUs (at least 1). */
+/* The number of CPUs this process may run on (its affinity mask where the system has
+ * one, else the online CPUs; at least 1). */
 int sys_cpu_count(void);
 
 /* Ends the process now with status: flushes stdout and stderr, then _exit (no atexit
