@@ -260,11 +260,32 @@ static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
     return rc;
 }
 
+/* Loads the scene and opens the preview. Returns the exit status. */
+static int run_preview(const cli_options *o, progress_bar *bar)
+{
+    char err[2048];
+    scene s;
+    int rc;
+
+    scene_init(&s);
+    progress_status(bar, "loading the scene ...");
+    if (scene_load(o->scene, &s, err, sizeof err) != 0 ||
+        scene_finish(&s, o->width, o->height, o->depth, err, sizeof err) != 0) {
+        fail_msg(bar, err);
+        rc = 1;
+    } else {
+        preview_options po = {o->device, o->settings, o->preview_script, o->quiet};
+        progress_clear(bar);
+        rc = preview_run(&s, &po);
+    }
+    scene_free(&s);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     cli_options o;
     char err[2048];
-    scene s;
     progress_bar bar;
     batch_times t;
     int rc;
@@ -281,19 +302,5 @@ int main(int argc, char **argv)
     progress_init(&bar, stderr,
                   progress_wanted(o.quiet, getenv("CLWHITTED_PROGRESS"), isatty(STDERR_FILENO)));
     t.start = sys_now();
-    if (!o.preview)
-        return run_batch(&o, &bar, &t);
-    scene_init(&s);
-    progress_status(&bar, "loading the scene ...");
-    if (scene_load(o.scene, &s, err, sizeof err) != 0 ||
-        scene_finish(&s, o.width, o.height, o.depth, err, sizeof err) != 0) {
-        fail_msg(&bar, err);
-        rc = 1;
-    } else {
-        preview_options po = {o.device, o.settings, o.preview_script, o.quiet};
-        progress_clear(&bar);
-        rc = preview_run(&s, &po);
-    }
-    scene_free(&s);
-    return rc;
+    return o.preview ? run_preview(&o, &bar) : run_batch(&o, &bar, &t);
 }
