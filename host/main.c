@@ -38,6 +38,7 @@
 /* Times of the phases of a batch render, from sys_now(). */
 typedef struct {
     double start, loaded, set_up, rendered, written;
+    double opencl; /* the OpenCL start-up's duration (beside the scene load) */
 } batch_times;
 
 /* The scene load of a batch render (scene_load, scene_finish), on a thread of its own
@@ -156,6 +157,8 @@ static void report(const cli_options *o, const scene *s, const renderer *r, cons
                st->passes);
         printf("kernels: raygen %.3f s, intersect %.3f s, shade %.3f s, occlude %.3f s\n",
                st->raygen_s, st->intersect_s, st->shade_s, st->occlude_s);
+        printf("fixed: opencl %.3f s (beside the parse), write %.3f s\n", t->opencl,
+               t->written - t->rendered);
     }
 }
 
@@ -244,6 +247,7 @@ static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
                          renderer_set_settings(b.r, &o->settings, b.r_err, sizeof b.r_err) == 0
                      ? 0
                      : -1;
+    t->opencl = sys_now() - t->start;
     if (scene_job_end(&load) != 0) {
         fail_msg(bar, load.err);
     } else {
