@@ -26,10 +26,10 @@ CPPFLAGS += -D_POSIX_C_SOURCE=200809L -DCL_TARGET_OPENCL_VERSION=120 \
 # `make render` can install the packages before anything asks for them.
 PKG_CFLAGS = $(shell pkg-config --cflags libpng libcjson OpenEXR 2>/dev/null)
 EXR_CORE   = $(or $(filter -lOpenEXRCore%,$(shell pkg-config --libs OpenEXR 2>/dev/null)),-lOpenEXRCore)
-LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson 2>/dev/null) $(EXR_CORE) -lm
+LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson 2>/dev/null) $(EXR_CORE) -lz -lm -pthread
 # --preview: GLFW and Xlib headers only; the libraries are loaded at run time (dlopen).
 GUI_CFLAGS = $(shell pkg-config --cflags glfw3 x11 2>/dev/null)
-CFLAGS  += $(WARN) $(OPT) $(PKG_CFLAGS) $(GUI_CFLAGS)
+CFLAGS  += $(WARN) $(OPT) -pthread $(PKG_CFLAGS) $(GUI_CFLAGS)
 
 # Host modules: every host/*.c but main.c goes into a static library that clwhitted, the
 # tools and the tests link, so each program holds only the objects it uses.

@@ -25,6 +25,13 @@
 #define CW_MAX_ABS 1e30
 #define CW_MAX_VERTS 10000000
 
+/* Image writing: at most CW_MAX_WRITE_THREADS threads (and no more than the online CPUs)
+ * compress an image; a PNG is compressed in independent pieces of whole rows, about
+ * CW_PNG_PIECE_BYTES of filtered rows each (the file's bytes depend on this, never on the
+ * number of threads). */
+#define CW_MAX_WRITE_THREADS 8
+#define CW_PNG_PIECE_BYTES 65536
+
 /* The preview's default samples per pixel before it stops refining. */
 #define CW_PREVIEW_DEFAULT_SPP 16
 

@@ -1,5 +1,6 @@
-/* Images: the image model (allocation), write options and their defaults, tone maps and
- * the sRGB transfer pair, and the metadata times both writers use. See image.h. */
+/* Images: the image model (allocation), write options and their defaults, tone maps, the
+ * sRGB transfer pair and the exact 8-bit sRGB encoding by table, and the metadata times
+ * both writers use. See image.h. */
 #include "image.h"
 
 #include <math.h>
@@ -74,8 +75,9 @@ const char *image_tonemap_name(int tonemap)
     }
 }
 
-/* Tone maps an exposed linear value to [0,1]; NaN and non-positive values give 0. */
-double image_tonemap_value(double x, int tonemap)
+/* Tone maps an exposed linear value to [0,1]; NaN and non-positive values give 0. Static
+ * so that the row encoder below inlines it; image_tonemap_value is the same function. */
+static double tonemap_value(double x, int tonemap)
 {
     if (!(x > 0.0))
         return 0.0;
@@ -86,6 +88,11 @@ double image_tonemap_value(double x, int tonemap)
     else if (tonemap == IMAGE_TONEMAP_ACES)
         x = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
     return x > 1.0 ? 1.0 : x;
+}
+
+double image_tonemap_value(double x, int tonemap)
+{
+    return tonemap_value(x, tonemap);
 }
 
 double image_display_value(double linear, double exposure, int tonemap)
@@ -101,6 +108,129 @@ double image_srgb_encode(double x)
 double image_srgb_decode(double v)
 {
     return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
+}
+
+/* ------------------------------------------------------------------------------------ */
+/* 8-bit sRGB: the definition, and the same function by table                            */
+
+unsigned char image_srgb8_exact(double d)
+{
+    if (!(d > 0.0)) /* also NaN */
+        return 0;
+    if (d >= 1.0)
+        return 255;
+    return (unsigned char)floor(image_srgb_encode(d) * 255.0 + 0.5);
+}
+
+/* The least double d in (0,1) with image_srgb8_exact(d) >= k, for k in 1..255: from the
+ * inverse transfer's estimate, widen a bracket lo < hi with code(lo) < k <= code(hi), then
+ * halve it until lo and hi are neighbouring doubles. */
+static double srgb8_bound(int k)
+{
+    double g = image_srgb_decode((k - 0.5) / 255.0), lo = g, hi = g, step = g * 1e-13;
+    while (image_srgb8_exact(lo) >= k) {
+        lo -= step;
+        step *= 2;
+    }
+    step = g * 1e-13;
+    while (image_srgb8_exact(hi) < k) {
+        hi += step;
+        step *= 2;
+    }
+    for (;;) {
+        double mid = lo + (hi - lo) * 0.5;
+        if (mid <= lo || mid >= hi)
+            return hi;
+        if (image_srgb8_exact(mid) >= k)
+            hi = mid;
+        else
+            lo = mid;
+    }
+}
+
+/* The bits of a float (positive floats order as their bits do). */
+static uint32_t float_bits(float f)
+{
+    uint32_t b;
+    memcpy(&b, &f, sizeof b);
+    return b;
+}
+
+void image_srgb8_table_init(image_srgb8_table *t)
+{
+    int k, i, c = 0;
+    t->bound[0] = 0.0;
+    for (k = 1; k < 256; k++)
+        t->bound[k] = srgb8_bound(k);
+    for (i = 0; i <= IMAGE_SRGB8_BINS; i++) {
+        double d = (double)i / IMAGE_SRGB8_BINS;
+        while (c < 255 && d >= t->bound[c + 1])
+            c++;
+        t->bin[i] = (unsigned char)c;
+    }
+    /* The float bounds: the least float at or above each double bound. */
+    t->fbound[0] = 0;
+    for (k = 1; k < 256; k++) {
+        float f = (float)t->bound[k];
+        if ((double)f < t->bound[k])
+            f = nextafterf(f, 2.0f);
+        t->fbound[k] = float_bits(f);
+    }
+    t->fbound[256] = UINT32_MAX; /* a sentinel above every float in [0,1) */
+    for (i = 0, c = 0; i < IMAGE_SRGB8_FBINS; i++) {
+        while (c < 255 && (uint32_t)i << 16 >= t->fbound[c + 1])
+            c++;
+        t->fbin[i] = (unsigned char)c;
+    }
+}
+
+/* The number of bounds at or below d: the bin of d gives the count at its lower end, and
+ * no bin spans more than one code step (the steepest part of the curve, 12.92 * 255 codes
+ * per unit, is 0.8 codes per bin), so the loop runs at most once; it is a loop all the
+ * same, so that the result never depends on that margin. */
+static unsigned char srgb8_lookup(const image_srgb8_table *t, double d)
+{
+    int c;
+    if (!(d > 0.0))
+        return 0;
+    if (d >= 1.0)
+        return 255;
+    c = t->bin[(int)(d * IMAGE_SRGB8_BINS)];
+    while (c < 255 && d >= t->bound[c + 1])
+        c++;
+    return (unsigned char)c;
+}
+
+unsigned char image_srgb8(const image_srgb8_table *t, double d)
+{
+    return srgb8_lookup(t, d);
+}
+
+/* The same on the linear float itself, when the display value is that float clamped
+ * (IMAGE_TONEMAP_CLAMP, scale 1): a float's code is the number of float bounds at or below
+ * it, its bits' top 16 bits (the exponent and 7 mantissa bits) giving the start. */
+static unsigned char srgb8_lookup_float(const image_srgb8_table *t, float f)
+{
+    uint32_t b = float_bits(f);
+    int c;
+    if (b - 1u >= 0x3f7fffffu) /* not in (0, 1): 0, negative or NaN give 0; 1 to inf 255 */
+        return b >= 0x3f800000u && b <= 0x7f800000u ? 255 : 0;
+    c = t->fbin[b >> 16];
+    while (b >= t->fbound[c + 1])
+        c++;
+    return (unsigned char)c;
+}
+
+void image_srgb8_encode(const image_srgb8_table *t, const float *linear, size_t n, double scale,
+                        int tonemap, unsigned char *out)
+{
+    size_t i;
+    if (tonemap == IMAGE_TONEMAP_CLAMP && scale == 1.0)
+        for (i = 0; i < n; i++)
+            out[i] = srgb8_lookup_float(t, linear[i]);
+    else
+        for (i = 0; i < n; i++)
+            out[i] = srgb8_lookup(t, tonemap_value(linear[i] * scale, tonemap));
 }
 
 const char *image_library_versions(void)

@@ -1,8 +1,10 @@
 /* Writing OpenEXR (OpenEXRCore C API): linear RGB as 32-bit or half floats, ZIP
- * compressed, with the metadata of image_write_opts; and the OpenEXRCore error handling
- * that the reader (image_read.c) shares. See image.h and image_internal.h. */
+ * compressed (chunks compressed on several threads, written in order), with the metadata
+ * of image_write_opts; and the OpenEXRCore error handling that the reader (image_read.c)
+ * shares. See image.h and image_internal.h. */
 #include <errno.h>
 #include <limits.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,7 +16,9 @@
 #include <openexr.h>
 
 #include "image.h"
+#include "config.h"
 #include "image_internal.h"
+#include "par.h"
 #include "sys.h"
 
 /* ------------------------------------------------------------------------------------ */
@@ -22,12 +26,16 @@
 
 void image_exr_error_cb(exr_const_context_t ctxt, exr_result_t code, const char *msg)
 {
+    /* the writer's jobs can fail on several threads at once */
+    static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
     void *ud = NULL;
     image_exr_state *st;
     if (!ctxt || exr_get_user_data(ctxt, &ud) != EXR_ERR_SUCCESS || !ud)
         return; /* no context: nowhere to store it; the code is still returned */
     st = ud;
+    pthread_mutex_lock(&lock);
     snprintf(st->msg, sizeof st->msg, "%s", msg ? msg : exr_get_default_error_message(code));
+    pthread_mutex_unlock(&lock);
 }
 
 void image_exr_fail(char *err, size_t errlen, const char *path, const char *what, exr_result_t rv,
@@ -171,6 +179,129 @@ static exr_result_t exr_set_meta(exr_context_t ctx, const image_write_opts *o, c
     return EXR_ERR_SUCCESS;
 }
 
+/* The chunks of one image, compressed on several threads (par.c) and written in order:
+ * each slot has its own encoding pipeline, whose write step is left out (the caller
+ * writes the compressed chunk when its turn comes), as is the library's wait for the
+ * chunk's turn. OpenEXRCore locks the context inside the calls the jobs make. */
+typedef struct {
+    exr_encode_pipeline_t enc;
+    int ready; /* enc initialised */
+    int32_t y; /* the chunk's first row */
+    exr_result_t rv;
+    const char *what; /* the failed step */
+} exr_slot;
+
+typedef struct {
+    exr_context_t ctx;
+    int part, half;
+    int32_t lines;           /* rows per chunk */
+    const unsigned char *px; /* the pixels, as the file's type */
+    size_t elem, line_bytes; /* bytes per value and per row */
+    exr_slot *slot;
+    int window;
+    const char *bad_channel; /* a channel we do not write, when a job found one */
+} exr_chunks;
+
+static int exr_slot_fail(exr_slot *sl, exr_result_t rv, const char *what)
+{
+    sl->rv = rv;
+    sl->what = what;
+    return 1;
+}
+
+/* Compresses chunk j into its slot's pipeline. */
+static int exr_chunk_job(void *ctx, int j, int thread)
+{
+    static const char *const names[3] = {"R", "G", "B"};
+    exr_chunks *x = ctx;
+    exr_slot *sl = &x->slot[j % x->window];
+    exr_chunk_info_t cinfo;
+    exr_result_t rv;
+    const unsigned char *row;
+    (void)thread;
+    sl->y = j * x->lines;
+    row = x->px + (size_t)sl->y * x->line_bytes;
+    if ((rv = exr_write_scanline_chunk_info(x->ctx, x->part, sl->y, &cinfo)) != EXR_ERR_SUCCESS)
+        return exr_slot_fail(sl, rv, "exr_write_scanline_chunk_info");
+    if (!sl->ready) {
+        if ((rv = exr_encoding_initialize(x->ctx, x->part, &cinfo, &sl->enc)) != EXR_ERR_SUCCESS)
+            return exr_slot_fail(sl, rv, "exr_encoding_initialize");
+        sl->ready = 1;
+    } else if ((rv = exr_encoding_update(x->ctx, x->part, &cinfo, &sl->enc)) != EXR_ERR_SUCCESS) {
+        return exr_slot_fail(sl, rv, "exr_encoding_update");
+    }
+    /* The pipeline's channels are in file order (alphabetical: B, G, R); match by name
+     * rather than by position. */
+    for (int c = 0; c < sl->enc.channel_count; c++) {
+        exr_coding_channel_info_t *ch = &sl->enc.channels[c];
+        int comp = -1;
+        for (int k = 0; k < 3; k++)
+            if (ch->channel_name && strcmp(ch->channel_name, names[k]) == 0)
+                comp = k;
+        if (comp < 0) {
+            x->bad_channel = ch->channel_name ? ch->channel_name : "?";
+            return exr_slot_fail(sl, EXR_ERR_INVALID_ARGUMENT, NULL);
+        }
+        ch->user_bytes_per_element = (int16_t)x->elem;
+        ch->user_data_type = x->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+        ch->user_pixel_stride = (int32_t)(3 * x->elem);
+        ch->user_line_stride = (int32_t)x->line_bytes;
+        ch->encode_from_ptr = row + (size_t)comp * x->elem;
+    }
+    if (!sl->enc.convert_and_pack_fn) {
+        rv = exr_encoding_choose_default_routines(x->ctx, x->part, &sl->enc);
+        if (rv != EXR_ERR_SUCCESS)
+            return exr_slot_fail(sl, rv, "exr_encoding_choose_default_routines");
+        sl->enc.yield_until_ready_fn = NULL; /* the order is ours to keep */
+        sl->enc.write_fn = NULL;             /* exr_chunk_emit writes */
+    }
+    if ((rv = exr_encoding_run(x->ctx, x->part, &sl->enc)) != EXR_ERR_SUCCESS)
+        return exr_slot_fail(sl, rv, "exr_encoding_run");
+    return 0;
+}
+
+/* Writes chunk j (what the library's own write step writes: the compressed buffer). */
+static int exr_chunk_emit(void *ctx, int j)
+{
+    exr_chunks *x = ctx;
+    exr_slot *sl = &x->slot[j % x->window];
+    exr_result_t rv = exr_write_scanline_chunk(x->ctx, x->part, sl->y, sl->enc.compressed_buffer,
+                                               sl->enc.compressed_bytes);
+    return rv != EXR_ERR_SUCCESS ? exr_slot_fail(sl, rv, "exr_write_scanline_chunk") : 0;
+}
+
+/* Compresses and writes every chunk. Returns EXR_ERR_SUCCESS, or the failure with *what
+ * (NULL with *bad_channel set when the encoder showed a channel we do not write). */
+static exr_result_t exr_write_chunks(exr_chunks *x, int32_t chunks, const char **what,
+                                     const char **bad_channel)
+{
+    int threads = sys_cpu_count(), i;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    threads = threads < CW_MAX_WRITE_THREADS ? threads : CW_MAX_WRITE_THREADS;
+    x->window = 2 * threads;
+    x->slot = calloc((size_t)x->window, sizeof *x->slot);
+    *bad_channel = NULL;
+    if (!x->slot) {
+        *what = "allocating the encoders";
+        return EXR_ERR_OUT_OF_MEMORY;
+    }
+    if (par_ordered(chunks, threads, x->window, exr_chunk_job, exr_chunk_emit, x) != 0) {
+        rv = EXR_ERR_UNKNOWN;
+        *what = "writing the chunks";
+        for (i = x->window - 1; i >= 0; i--) /* the failed slot (any one, if several) */
+            if (x->slot[i].rv != EXR_ERR_SUCCESS) {
+                rv = x->slot[i].rv;
+                *what = x->slot[i].what;
+            }
+    }
+    *bad_channel = x->bad_channel;
+    for (i = 0; i < x->window; i++)
+        if (x->slot[i].ready)
+            exr_encoding_destroy(x->ctx, &x->slot[i].enc);
+    free(x->slot);
+    return rv;
+}
+
 int image_exr_write(const image *img, const char *path, const image_write_opts *o, char *err,
                     size_t errlen)
 {
@@ -178,8 +309,8 @@ int image_exr_write(const image *img, const char *path, const image_write_opts *
     image_exr_state st;
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     exr_context_t ctx = NULL;
-    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
-    int enc_init = 0;
+    exr_chunks x;
+    const char *bad_channel;
     sys_tmpfile t;
     exr_result_t rv;
     const char *what = NULL;
@@ -262,53 +393,20 @@ int image_exr_write(const image *img, const char *path, const image_write_opts *
         goto fail_quiet;
     }
 
-    for (int32_t ci = 0; ci < chunks; ci++) {
-        exr_chunk_info_t cinfo;
-        int y = ci * lines;
-        const unsigned char *row = pixels + (size_t)y * line_bytes;
-        if (image_exr_failed(&st, (rv = exr_write_scanline_chunk_info(ctx, part, y, &cinfo)),
-                             "exr_write_scanline_chunk_info", &what))
-            goto fail;
-        if (!enc_init) {
-            if (image_exr_failed(&st, (rv = exr_encoding_initialize(ctx, part, &cinfo, &enc)),
-                                 "exr_encoding_initialize", &what))
-                goto fail;
-            enc_init = 1;
-        } else {
-            if (image_exr_failed(&st, (rv = exr_encoding_update(ctx, part, &cinfo, &enc)),
-                                 "exr_encoding_update", &what))
-                goto fail;
-        }
-        /* The pipeline's channels are in file order (alphabetical: B, G, R); match by name
-         * rather than by position. */
-        for (int c = 0; c < enc.channel_count; c++) {
-            exr_coding_channel_info_t *ch = &enc.channels[c];
-            int comp = -1;
-            for (int k = 0; k < 3; k++)
-                if (ch->channel_name && strcmp(ch->channel_name, names[k]) == 0)
-                    comp = k;
-            if (comp < 0) {
-                image_set_err(err, errlen, "%s: unexpected channel '%s' in EXR encoder", path,
-                              ch->channel_name ? ch->channel_name : "?");
-                goto fail_quiet;
-            }
-            ch->user_bytes_per_element = (int16_t)elem;
-            ch->user_data_type = o->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
-            ch->user_pixel_stride = (int32_t)(3 * elem);
-            ch->user_line_stride = (int32_t)line_bytes;
-            ch->encode_from_ptr = row + (size_t)comp * elem;
-        }
-        if (ci == 0)
-            if (image_exr_failed(&st, (rv = exr_encoding_choose_default_routines(ctx, part, &enc)),
-                                 "exr_encoding_choose_default_routines", &what))
-                goto fail;
-        if (image_exr_failed(&st, (rv = exr_encoding_run(ctx, part, &enc)), "exr_encoding_run",
-                             &what))
-            goto fail;
+    memset(&x, 0, sizeof x);
+    x.ctx = ctx;
+    x.part = part;
+    x.half = o->half;
+    x.lines = lines;
+    x.px = pixels;
+    x.elem = elem;
+    x.line_bytes = line_bytes;
+    rv = exr_write_chunks(&x, chunks, &what, &bad_channel);
+    if (bad_channel) {
+        image_set_err(err, errlen, "%s: unexpected channel '%s' in EXR encoder", path, bad_channel);
+        goto fail_quiet;
     }
-    enc_init = 0;
-    if (image_exr_failed(&st, (rv = exr_encoding_destroy(ctx, &enc)), "exr_encoding_destroy",
-                         &what))
+    if (rv != EXR_ERR_SUCCESS)
         goto fail;
     /* exr_finish writes the chunk offset table; it must succeed for a valid file. */
     st.msg[0] = '\0';
@@ -325,8 +423,6 @@ int image_exr_write(const image *img, const char *path, const image_write_opts *
 fail:
     image_exr_fail(err, errlen, path, what, rv, &st);
 fail_quiet:
-    if (enc_init)
-        exr_encoding_destroy(ctx, &enc);
     if (ctx)
         exr_finish(&ctx);
     sys_tmp_abort(&t);

@@ -5,6 +5,7 @@
 #define CW_IMAGE_INTERNAL_H
 
 #include <stddef.h>
+#include <stdint.h>
 #include <time.h>
 
 #include <openexr.h>
@@ -24,6 +25,37 @@ int image_check_writable(const image *img, const char *path, char *err, size_t e
 
 /* Tone maps an exposed linear value to [0,1]; NaN and non-positive values give 0. */
 double image_tonemap_value(double x, int tonemap);
+
+/* 8-bit sRGB of a display value d (a tone mapped value, see image_tonemap_value), by
+ * definition: NaN and d <= 0 give 0, d >= 1 gives 255, else
+ * floor(image_srgb_encode(d) * 255 + 0.5). */
+unsigned char image_srgb8_exact(double d);
+
+/* The same function by table, exactly: bound[k] is the least double whose code is k or
+ * more (found by search on image_srgb8_exact itself, so the table holds whatever the
+ * platform's pow gives), and bin[i] the code of i / IMAGE_SRGB8_BINS, where the search for
+ * a value's code starts. A code is the number of bounds at or below the value, which is
+ * the definition wherever it does not decrease between neighbouring doubles
+ * (tests/test_image.c checks that around every bound). Building one takes a few thousand
+ * pow calls (about 0.1 ms); image_srgb8_encode then costs a few operations per value where
+ * the definition costs a pow. */
+#define IMAGE_SRGB8_BINS 4096
+#define IMAGE_SRGB8_FBINS 0x3f80 /* the top 16 bits of the floats in [0,1) */
+typedef struct {
+    double bound[256]; /* bound[0] = 0 */
+    unsigned char bin[IMAGE_SRGB8_BINS + 1];
+    /* the same for float values (the clamp tone map at exposure 0): the bits of the least
+     * float at or above each bound (fbound[256] above them all), and the code of the least
+     * float of each value of the top 16 bits */
+    uint32_t fbound[257];
+    unsigned char fbin[IMAGE_SRGB8_FBINS];
+} image_srgb8_table;
+
+void image_srgb8_table_init(image_srgb8_table *t);
+unsigned char image_srgb8(const image_srgb8_table *t, double d);
+/* out[i] = image_srgb8(t, image_tonemap_value(linear[i] * scale, tonemap)), i < n. */
+void image_srgb8_encode(const image_srgb8_table *t, const float *linear, size_t n, double scale,
+                        int tonemap, unsigned char *out);
 
 /* Metadata times: local time as "YYYY:MM:DD hh:mm:ss" (the EXR capDate form) with UTC
  * minus local time in seconds (the EXR utcOffset); UTC as ISO 8601 (the PNG Creation

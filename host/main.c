@@ -1,5 +1,8 @@
 /* clwhitted: the batch front end. main() parses the command line (cli.c), loads the scene,
- * then either opens the preview (preview.c) or renders once and writes the image. */
+ * then either opens the preview (preview.c) or renders once and writes the image. A batch
+ * render loads the scene on a second thread while OpenCL starts (platform, device,
+ * context, queue), and a successful one ends without tearing anything down. */
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,10 +18,75 @@
 #include "sys.h"
 #include "version.h"
 
+/* Full teardown at exit only where a leak checker looks: sanitizer builds (LeakSanitizer
+ * checks at exit) or -DCW_FULL_TEARDOWN=1. Otherwise a successful batch render ends with
+ * sys_exit_now: the scene, the image and the renderer are not freed, the OpenCL objects not
+ * released, and the libraries' exit-time destructors (PoCL's, LLVM's) do not run. */
+#ifndef CW_FULL_TEARDOWN
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_LEAK__)
+#define CW_FULL_TEARDOWN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(leak_sanitizer)
+#define CW_FULL_TEARDOWN 1
+#endif
+#endif
+#endif
+#ifndef CW_FULL_TEARDOWN
+#define CW_FULL_TEARDOWN 0
+#endif
+
 /* Times of the phases of a batch render, from sys_now(). */
 typedef struct {
     double start, loaded, set_up, rendered, written;
+    double opencl; /* the OpenCL start-up's duration (beside the scene load) */
 } batch_times;
+
+/* The scene load of a batch render (scene_load, scene_finish), on a thread of its own
+ * while the main thread starts OpenCL, or on the main thread before it when no thread can
+ * be started. OpenCL starts on the main thread because LLVM, inside PoCL, sets up its
+ * signal handling there (AddressSanitizer cannot free an LLVM alternate signal stack when
+ * the thread that set it exits). */
+typedef struct {
+    const cli_options *o;
+    scene *s;
+    int rc; /* 0, or -1 with err */
+    char err[2048];
+    double done_at; /* sys_now() at the end */
+    pthread_t tid;
+    int threaded;
+} scene_job;
+
+static void *scene_job_main(void *arg)
+{
+    scene_job *j = arg;
+    const cli_options *o = j->o;
+    j->rc = scene_load(o->scene, j->s, j->err, sizeof j->err) != 0 ||
+                    scene_finish(j->s, o->width, o->height, o->depth, j->err, sizeof j->err) != 0
+                ? -1
+                : 0;
+    j->done_at = sys_now();
+    return NULL;
+}
+
+/* Starts the load, or does it now when no thread can be started. */
+static void scene_job_begin(scene_job *j, const cli_options *o, scene *s)
+{
+    memset(j, 0, sizeof *j);
+    j->o = o;
+    j->s = s;
+    j->threaded = pthread_create(&j->tid, NULL, scene_job_main, j) == 0;
+    if (!j->threaded)
+        scene_job_main(j);
+}
+
+/* Waits for the load. Returns 0, or -1 with j->err. */
+static int scene_job_end(scene_job *j)
+{
+    if (j->threaded)
+        pthread_join(j->tid, NULL);
+    j->threaded = 0;
+    return j->rc;
+}
 
 /* Prints an error, clearing the progress line first. */
 static void fail_msg(progress_bar *bar, const char *msg)
@@ -89,23 +157,34 @@ static void report(const cli_options *o, const scene *s, const renderer *r, cons
                st->passes);
         printf("kernels: raygen %.3f s, intersect %.3f s, shade %.3f s, occlude %.3f s\n",
                st->raygen_s, st->intersect_s, st->shade_s, st->occlude_s);
+        printf("fixed: opencl %.3f s (beside the parse), write %.3f s\n", t->opencl,
+               t->written - t->rendered);
     }
 }
 
-/* Renders the finished scene s once and writes it to o->output (or the default name).
+/* What a batch render holds until the end of the process. */
+typedef struct {
+    scene s;
+    renderer *r; /* NULL until created */
+    int r_rc;    /* renderer_create and renderer_set_settings: 0, or -1 with r_err */
+    char r_err[2048];
+    image img;
+    char *default_out;
+} batch;
+
+/* Renders the finished scene b->s once and writes it to o->output (or the default name).
  * Returns the exit status. */
-static int render_batch(cli_options *o, const scene *s, progress_bar *bar, batch_times *t)
+static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times *t)
 {
     char err[2048], title[256], software[64], settings[256];
-    char *default_out = NULL;
     const char *output = o->output;
-    renderer *r = NULL;
-    image img = {0, 0, NULL};
+    const scene *s = &b->s;
+    renderer *r;
     render_stats st;
     double trace_s;
-    int is_exr, rc = 1;
+    int is_exr;
 
-    if (!output && !(output = default_out = default_output(s))) {
+    if (!output && !(output = b->default_out = default_output(s))) {
         fprintf(stderr, "clwhitted: out of memory\n");
         return 1;
     }
@@ -117,21 +196,23 @@ static int render_batch(cli_options *o, const scene *s, progress_bar *bar, batch
         if (!is_exr && o->write.half)
             fprintf(stderr, "clwhitted: warning: --half applies to EXR output only\n");
     }
-    t->loaded = sys_now();
     progress_status(bar, "building the kernels ...");
-    if (renderer_create(&r, o->device, err, sizeof err) != 0 ||
-        renderer_set_settings(r, &o->settings, err, sizeof err) != 0 ||
-        renderer_set_scene(r, s, err, sizeof err) != 0) {
+    if (b->r_rc != 0) {
+        fail_msg(bar, b->r_err);
+        return 1;
+    }
+    r = b->r;
+    if (renderer_set_scene(r, s, err, sizeof err) != 0) {
         fail_msg(bar, err);
-        goto out_destroy;
+        return 1;
     }
     t->set_up = sys_now();
     renderer_set_progress(r, progress_update, bar);
     progress_begin(bar);
     progress_update(bar, 0.0, 0);
-    if (renderer_render(r, &img, err, sizeof err) != 0) {
+    if (renderer_render(r, &b->img, err, sizeof err) != 0) {
         fail_msg(bar, err);
-        goto out_destroy;
+        return 1;
     }
     progress_clear(bar);
     t->rendered = sys_now();
@@ -139,18 +220,69 @@ static int render_batch(cli_options *o, const scene *s, progress_bar *bar, batch
     trace_s = st.trace_s > 0 ? st.trace_s : t->rendered - t->set_up;
     set_metadata(o, s, r, is_exr, trace_s, &o->write, title, sizeof title, software,
                  sizeof software, settings, sizeof settings);
-    if (image_write_ex(&img, output, &o->write, err, sizeof err) != 0) {
+    if (image_write_ex(&b->img, output, &o->write, err, sizeof err) != 0) {
         fprintf(stderr, "clwhitted: %s\n", err);
-        goto out_free_image;
+        return 1;
     }
     t->written = sys_now();
     report(o, s, r, output, t, &st, trace_s);
-    rc = 0;
-out_free_image:
-    image_free(&img);
-out_destroy:
-    renderer_destroy(r);
-    free(default_out);
+    return 0;
+}
+
+/* Loads the scene while OpenCL starts, renders it, and ends the process (see
+ * CW_FULL_TEARDOWN). Errors come in the order of the steps: the scene's, then the
+ * device's. Returns the exit status. */
+static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
+{
+    scene_job load;
+    batch b;
+    int rc = 1;
+
+    memset(&b, 0, sizeof b);
+    scene_init(&b.s);
+    progress_status(bar, "loading the scene ...");
+    scene_job_begin(&load, o, &b.s);
+    if (load.threaded || load.rc == 0) /* without a thread, a failed load ends it here */
+        b.r_rc = renderer_create(&b.r, o->device, b.r_err, sizeof b.r_err) == 0 &&
+                         renderer_set_settings(b.r, &o->settings, b.r_err, sizeof b.r_err) == 0
+                     ? 0
+                     : -1;
+    t->opencl = sys_now() - t->start;
+    if (scene_job_end(&load) != 0) {
+        fail_msg(bar, load.err);
+    } else {
+        t->loaded = load.done_at;
+        progress_clear(bar);
+        rc = render_batch(o, &b, bar, t);
+    }
+    if (rc == 0 && !CW_FULL_TEARDOWN)
+        sys_exit_now(0);
+    renderer_destroy(b.r);
+    image_free(&b.img);
+    free(b.default_out);
+    scene_free(&b.s);
+    return rc;
+}
+
+/* Loads the scene and opens the preview. Returns the exit status. */
+static int run_preview(const cli_options *o, progress_bar *bar)
+{
+    char err[2048];
+    scene s;
+    int rc;
+
+    scene_init(&s);
+    progress_status(bar, "loading the scene ...");
+    if (scene_load(o->scene, &s, err, sizeof err) != 0 ||
+        scene_finish(&s, o->width, o->height, o->depth, err, sizeof err) != 0) {
+        fail_msg(bar, err);
+        rc = 1;
+    } else {
+        preview_options po = {o->device, o->settings, o->preview_script, o->quiet};
+        progress_clear(bar);
+        rc = preview_run(&s, &po);
+    }
+    scene_free(&s);
     return rc;
 }
 
@@ -158,7 +290,6 @@ int main(int argc, char **argv)
 {
     cli_options o;
     char err[2048];
-    scene s;
     progress_bar bar;
     batch_times t;
     int rc;
@@ -175,22 +306,5 @@ int main(int argc, char **argv)
     progress_init(&bar, stderr,
                   progress_wanted(o.quiet, getenv("CLWHITTED_PROGRESS"), isatty(STDERR_FILENO)));
     t.start = sys_now();
-    scene_init(&s);
-    progress_status(&bar, "loading the scene ...");
-    if (scene_load(o.scene, &s, err, sizeof err) != 0 ||
-        scene_finish(&s, o.width, o.height, o.depth, err, sizeof err) != 0) {
-        fail_msg(&bar, err);
-        rc = 1;
-        goto out_free_scene;
-    }
-    progress_clear(&bar);
-    if (o.preview) {
-        preview_options po = {o.device, o.settings, o.preview_script, o.quiet};
-        rc = preview_run(&s, &po);
-    } else {
-        rc = render_batch(&o, &s, &bar, &t);
-    }
-out_free_scene:
-    scene_free(&s);
-    return rc;
+    return o.preview ? run_preview(&o, &bar) : run_batch(&o, &bar, &t);
 }

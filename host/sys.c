@@ -1,7 +1,13 @@
 /* The host's interface to the operating system. See sys.h. */
+#if defined(__linux__) && !defined(_GNU_SOURCE)
+#define _GNU_SOURCE /* sched_getaffinity and CPU_COUNT: the CPUs this process may use */
+#endif
 #include "sys.h"
 
 #include <errno.h>
+#if defined(__linux__)
+#include <sched.h>
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +21,25 @@ double sys_now(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+int sys_cpu_count(void)
+{
+    long n;
+#if defined(__linux__) && defined(CPU_COUNT)
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0)
+        return CPU_COUNT(&set); /* taskset and cpusets leave fewer than are online */
+#endif
+    n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1 : n > 4096 ? 4096 : (int)n;
+}
+
+void sys_exit_now(int status)
+{
+    fflush(stdout);
+    fflush(stderr);
+    _exit(status);
 }
 
 int sys_has_ext(const char *path, const char *ext)

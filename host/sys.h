@@ -1,5 +1,6 @@
-/* The host's interface to the operating system: the clock, file names, whole-file reads
- * and atomic file replacement. Every other host file goes through these for such things. */
+/* The host's interface to the operating system: the clock, the number of CPUs, file names,
+ * whole-file reads and atomic file replacement. Every other host file goes through these for
+ * such things. */
 #ifndef CW_SYS_H
 #define CW_SYS_H
 
@@ -7,6 +8,14 @@
 
 /* Seconds on the monotonic clock (for durations only). */
 double sys_now(void);
+
+/* The number of CPUs this process may run on (its affinity mask where the system has
+ * one, else the online CPUs; at least 1). */
+int sys_cpu_count(void);
+
+/* Ends the process now with status: flushes stdout and stderr, then _exit (no atexit
+ * handlers or library destructors run, nothing is freed). */
+void sys_exit_now(int status);
 
 /* 1 when the file name (after the last '/') ends in ext (".exr"), case-insensitively;
  * a name that is only the extension (".exr") does not count. */

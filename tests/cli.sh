@@ -39,6 +39,11 @@ check_grep "unknown device message" "no OpenCL device matches" "$T/err"
 # bad input: file:line message, exit 1, no image written
 "$BIN" -o "$T/missing.png" "$T/missing.nff" >"$T/out" 2>"$T/err"; check "missing file" 1 $?
 check_grep "missing file named" "missing.nff" "$T/err"
+# the scene loads while OpenCL starts, but its error still comes first and alone
+"$BIN" --device no-such-device -o "$T/missing.png" "$T/missing.nff" >"$T/out" 2>"$T/err"
+check "missing file and unknown device" 1 $?
+check_grep "missing file and unknown device: the scene's error" "missing.nff" "$T/err"
+check_true "missing file and unknown device: one line" test "$(wc -l <"$T/err")" -eq 1
 printf 'b 0 0 0\nq 1 2 3\n' >"$T/bad.nff"
 "$BIN" -o "$T/bad.png" "$T/bad.nff" >"$T/out" 2>"$T/err"; check "unknown entity" 1 $?
 check_grep "unknown entity names file:line" "bad.nff:2:" "$T/err"
@@ -140,6 +145,10 @@ check_grep "--list-devices: units, memory, max alloc, OpenCL C, fp64" \
 check_grep "summary line" \
     "^clwhitted: wrote $T/sum.png (16x12, depth [0-9]*) in [0-9.]* s on .*: load [0-9.]* s, setup [0-9.]* s, render [0-9.]* s, [0-9.]* Mrays/s$" "$T/out"
 check_true "one summary line" test "$(wc -l <"$T/out")" -eq 1
+"$BIN" --stats -W 16 -H 12 -o "$T/stats.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "--stats render" 0 $?
+check_grep "--stats: phase times" "^time: parse [0-9.]* s, build [0-9.]* s, compile [0-9.]* s, upload [0-9.]* s, trace [0-9.]* s ([0-9]* passes)$" "$T/out"
+check_grep "--stats: fixed costs" "^fixed: opencl [0-9.]* s (beside the parse), write [0-9.]* s$" "$T/out"
 check_true "no progress bar when stderr is a file" test ! -s "$T/err"
 
 # the progress bar: forced on a file, it draws in place and clears the line at the end
