@@ -25,6 +25,10 @@
 #define CW_MAX_ABS 1e30
 #define CW_MAX_VERTS 10000000
 
+/* The NFF reader reads its file this many bytes at a time (a window that stays in the
+ * cache, instead of the whole file in memory). */
+#define CW_NFF_READ_CHUNK (1L << 18)
+
 /* The preview's default samples per pixel before it stops refining. */
 #define CW_PREVIEW_DEFAULT_SPP 16
 

@@ -106,11 +106,9 @@ void scene_area_add(scene_area *a, vec3f v)
     } else {
         newell_edge(a->normal, a->prev, v);
     }
-    for (k = 0; k < 3; k++) {
-        if (c[k] < a->lo[k])
-            a->lo[k] = c[k];
-        if (c[k] > a->hi[k])
-            a->hi[k] = c[k];
+    for (k = 0; k < 3; k++) { /* without branches: coordinates in a file are in no order */
+        a->lo[k] = c[k] < a->lo[k] ? c[k] : a->lo[k];
+        a->hi[k] = c[k] > a->hi[k] ? c[k] : a->hi[k];
     }
     a->prev = v;
     a->count++;
