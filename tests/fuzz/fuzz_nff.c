@@ -56,9 +56,8 @@ static void check_pieces(const uint8_t *data, size_t size)
                    (s.triangles.count == 0 ||
                     memcmp(s.triangles.data, whole.triangles.data,
                            s.triangles.count * sizeof(scene_triangle)) == 0) &&
-                   (s.spheres.count == 0 ||
-                    memcmp(s.spheres.data, whole.spheres.data,
-                           s.spheres.count * sizeof(scene_sphere)) == 0);
+                   (s.spheres.count == 0 || memcmp(s.spheres.data, whole.spheres.data,
+                                                   s.spheres.count * sizeof(scene_sphere)) == 0);
         }
         if (!same) {
             fprintf(stderr, "fuzz_nff: in pieces of %zu bytes: %d \"%s\"; whole: %d \"%s\"\n",
