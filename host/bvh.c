@@ -11,17 +11,31 @@
  * Depth is bounded: a node splits by SAH only while a worst-case split (n - 1 on one side)
  * would still leave room to finish by median splits within BVH_MAX_DEPTH; otherwise, and
  * whenever binning finds no split (non-finite or degenerate boxes), it splits at the
- * median centroid, which halves the count. */
+ * median centroid, which halves the count.
+ *
+ * On several threads (bvh_build_threads) the tree is the same, bit for bit: the top of the
+ * tree is built first, its large nodes binned in parallel (each thread bins a range; the
+ * bins are merged in range order, and a min or max keeps the earlier of equal values, as
+ * one pass in order does); its nodes of at most `cutoff` primitives become subtrees, built
+ * concurrently, each on its own range of the working array and into its own range of the
+ * node array (2k - 1 slots for k primitives: the most a subtree can need). A last pass
+ * closes the gaps, which puts every node where the one-thread build puts it. */
 #include "bvh.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "box.h"
+#include "config.h"
 
 #define MAX_BINS 16 /* per axis; a node of fewer primitives gets as many bins as it has */
+#define PAR_MIN_PRIMS (1 << 15) /* fewer primitives: one thread builds everything */
+#define PAR_BIN_MIN (1 << 14)   /* a top node of fewer primitives is binned on one thread */
+#define PAR_SUBTREES 8          /* subtrees per thread the top of the tree is cut into */
 #define C_TRAV 1.0
 #define C_ISECT 1.0
 
@@ -48,6 +62,29 @@ typedef struct {
 } task;
 
 _Static_assert(sizeof(prim) == 32, "prim is 32 bytes");
+
+/* A subtree built on its own: its task, where its nodes go (provisionally) and what it
+ * became. */
+typedef struct {
+    task t;
+    int pos;       /* its root's slot in the provisional layout; 2 * count - 1 slots are kept */
+    int num_nodes; /* nodes built */
+    int depth;     /* deepest node */
+    int final;     /* its root's index once the gaps are closed */
+} subtree;
+
+/* What a build shares between its threads. */
+typedef struct {
+    prim *w;
+    cw_bvh_node *nodes;
+    int max_leaf, threads;
+    int cutoff; /* the top of the tree: tasks of at most this many primitives are subtrees */
+    subtree *subs;
+    int nsubs, subs_cap;
+    int *order; /* subtrees by size, largest first */
+    int next;   /* next of order to build */
+    pthread_mutex_t lock;
+} builder;
 
 /* Bin of a doubled centroid: NaN goes to bin 0, out-of-range values to the end bins. */
 static inline int bin_of(float c, float cmin, float scale, float last)
@@ -114,19 +151,12 @@ static void select_nth(prim *w, int begin, int end, int nth, int axis)
     }
 }
 
-/* Best binned SAH split of w[begin, end) whose doubled centroids span [clo, chi], with
- * nb bins per axis. Returns the cost relative to the node area (C_trav + sum of child
- * area * count / node area), or INFINITY when no bin boundary separates the primitives;
- * sets *axis, *split (the first bin of the second child) and the bin scales. */
-static double best_split(const prim *w, int begin, int end, const float clo[3], const float chi[3],
-                         double node_area, int nb, float scale[3], int *axis, int *split)
+/* Bins w[begin, end) by doubled centroid on each axis. */
+static void bin_range(const prim *w, int begin, int end, const float clo[3], const float scale[3],
+                      int nb, bin bins[3][MAX_BINS])
 {
-    bin bins[3][MAX_BINS];
-    double best = INFINITY;
     float last = (float)(nb - 1);
     for (int a = 0; a < 3; a++) {
-        float ext = chi[a] - clo[a];
-        scale[a] = ext > 0.0f ? (float)nb / ext : 0.0f;
         for (int b = 0; b < nb; b++) {
             box_empty(bins[a][b].lo, bins[a][b].hi);
             bins[a][b].count = 0;
@@ -140,6 +170,76 @@ static double best_split(const prim *w, int begin, int end, const float clo[3], 
             box_grow(b->lo, b->hi, p->lo, p->hi);
         }
     }
+}
+
+/* One thread's share of a node's binning. */
+typedef struct {
+    const prim *w;
+    int begin, end, nb;
+    const float *clo, *scale;
+    bin bins[3][MAX_BINS];
+} bin_part;
+
+static void *bin_part_run(void *arg)
+{
+    bin_part *bp = arg;
+    bin_range(bp->w, bp->begin, bp->end, bp->clo, bp->scale, bp->nb, bp->bins);
+    return NULL;
+}
+
+/* bin_range on `threads` threads: each bins a range, and the bins are merged in range order,
+ * so that every count, min and max is what one pass in order gives. */
+static void bin_parallel(const prim *w, int begin, int end, const float clo[3],
+                         const float scale[3], int nb, int threads, bin bins[3][MAX_BINS])
+{
+    bin_part part[CW_BVH_MAX_THREADS];
+    pthread_t tid[CW_BVH_MAX_THREADS];
+    int started[CW_BVH_MAX_THREADS], n = end - begin;
+    for (int k = 1; k < threads; k++) {
+        bin_part *bp = &part[k];
+        bp->w = w;
+        bp->begin = begin + (int)((long long)n * k / threads);
+        bp->end = begin + (int)((long long)n * (k + 1) / threads);
+        bp->nb = nb;
+        bp->clo = clo;
+        bp->scale = scale;
+        started[k] = pthread_create(&tid[k], NULL, bin_part_run, bp) == 0;
+    }
+    bin_range(w, begin, begin + (int)((long long)n / threads), clo, scale, nb, bins);
+    for (int k = 1; k < threads; k++) {
+        if (started[k])
+            pthread_join(tid[k], NULL);
+        else
+            bin_part_run(&part[k]); /* no thread: bin it here */
+        for (int a = 0; a < 3; a++) {
+            for (int b = 0; b < nb; b++) {
+                bins[a][b].count += part[k].bins[a][b].count;
+                box_grow(bins[a][b].lo, bins[a][b].hi, part[k].bins[a][b].lo,
+                         part[k].bins[a][b].hi);
+            }
+        }
+    }
+}
+
+/* Best binned SAH split of w[begin, end) whose doubled centroids span [clo, chi], with
+ * nb bins per axis, binned on `threads` threads. Returns the cost relative to the node area
+ * (C_trav + sum of child area * count / node area), or INFINITY when no bin boundary
+ * separates the primitives; sets *axis, *split (the first bin of the second child) and the
+ * bin scales. */
+static double best_split(const prim *w, int begin, int end, const float clo[3], const float chi[3],
+                         double node_area, int nb, int threads, float scale[3], int *axis,
+                         int *split)
+{
+    bin bins[3][MAX_BINS];
+    double best = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        float ext = chi[a] - clo[a];
+        scale[a] = ext > 0.0f ? (float)nb / ext : 0.0f;
+    }
+    if (threads > 1)
+        bin_parallel(w, begin, end, clo, scale, nb, threads, bins);
+    else
+        bin_range(w, begin, end, clo, scale, nb, bins);
     for (int a = 0; a < 3; a++) {
         double right_area[MAX_BINS];
         int right_count[MAX_BINS];
@@ -228,23 +328,49 @@ static void partition_bins(prim *w, const task *t, int axis, int split, float sc
     right->end = t->end;
 }
 
-/* Builds the nodes over w[0, n); returns the node count and sets *depth. */
-static int build_nodes(cw_bvh_node *nodes, prim *w, int n, int max_leaf, int *depth)
+/* Records task t as a subtree to build later, rooted at slot pos. Returns 0, or -1 when
+ * out of memory. */
+static int defer_subtree(builder *bd, const task *t, int pos)
+{
+    if (bd->nsubs == bd->subs_cap) {
+        int cap = bd->subs_cap ? 2 * bd->subs_cap : 64;
+        subtree *ns = realloc(bd->subs, (size_t)cap * sizeof *ns);
+        if (!ns)
+            return -1;
+        bd->subs = ns;
+        bd->subs_cap = cap;
+    }
+    memset(&bd->subs[bd->nsubs], 0, sizeof bd->subs[0]);
+    bd->subs[bd->nsubs].t = *t;
+    bd->subs[bd->nsubs].pos = pos;
+    bd->nsubs++;
+    return 0;
+}
+
+/* Builds the nodes of the subtree of task *root into nodes[0, ...) (node indices relative to
+ * nodes; leaf starts index the working array). In the top phase (top = 1), the large nodes
+ * are binned on bd->threads threads and every task of at most bd->cutoff primitives becomes
+ * a subtree for later, keeping 2 * count - 1 slots. Returns the slots used, or -1 when out
+ * of memory; raises *depth to the deepest node made. */
+static int build_nodes(builder *bd, cw_bvh_node *nodes, const task *root, int top, int *depth)
 {
     task stack[BVH_MAX_DEPTH + 2];
-    int top = 0, num_nodes = 0;
+    prim *w = bd->w;
+    int sp = 1, num_nodes = 0, max_leaf = bd->max_leaf;
     int leaf_cap = max_leaf > BVH_COINCIDENT_LEAF ? max_leaf : BVH_COINCIDENT_LEAF;
-    *depth = 0;
-    task_range(&stack[0], w, 0, n);
-    stack[0].depth = 1;
-    stack[0].parent = -1;
-    top = 1;
-    while (top > 0) {
-        task t = stack[--top], *left, *right;
+    stack[0] = *root;
+    while (sp > 0) {
+        task t = stack[--sp], *left, *right;
         int ni = num_nodes++, count = t.end - t.begin, axis = 0, split_done = 0, coincident = 1;
         cw_bvh_node *node = &nodes[ni];
         if (t.parent >= 0)
             nodes[t.parent].start = ni;
+        if (top && count <= bd->cutoff) {
+            if (defer_subtree(bd, &t, ni) != 0)
+                return -1;
+            num_nodes += 2 * count - 2; /* the most its subtree can need */
+            continue;
+        }
         if (t.depth > *depth)
             *depth = t.depth;
         for (int a = 0; a < 3; a++) {
@@ -260,13 +386,14 @@ static int build_nodes(cw_bvh_node *nodes, prim *w, int n, int max_leaf, int *de
         }
 
         /* second child below the first, so that the first is made next (index ni + 1) */
-        right = &stack[top];
-        left = &stack[top + 1];
+        right = &stack[sp];
+        left = &stack[sp + 1];
         if (!coincident && t.depth + 1 + median_levels(count - 1, max_leaf) <= BVH_MAX_DEPTH) {
             float scale[3];
             int split = 0, nb = count < MAX_BINS ? count : MAX_BINS;
+            int threads = top && count >= PAR_BIN_MIN ? bd->threads : 1;
             double cost = best_split(w, t.begin, t.end, t.clo, t.chi, box_area(t.lo, t.hi), nb,
-                                     scale, &axis, &split);
+                                     threads, scale, &axis, &split);
             if (cost < C_ISECT * count || (count > max_leaf && cost < INFINITY)) {
                 partition_bins(w, &t, axis, split, scale[axis], (float)(nb - 1), left, right);
                 /* both sides are non-empty (the bins said so); stay safe all the same */
@@ -298,17 +425,174 @@ static int build_nodes(cw_bvh_node *nodes, prim *w, int n, int max_leaf, int *de
         right->depth = left->depth = t.depth + 1;
         right->parent = ni;
         left->parent = -1;
-        top += 2;
+        sp += 2;
     }
     return num_nodes;
 }
 
+/* Builds the subtrees in order of bd->order until none is left (one such loop per thread). */
+static void *build_subtrees(void *arg)
+{
+    builder *bd = arg;
+    for (;;) {
+        subtree *st;
+        task t;
+        int k;
+        pthread_mutex_lock(&bd->lock);
+        k = bd->next < bd->nsubs ? bd->order[bd->next++] : -1;
+        pthread_mutex_unlock(&bd->lock);
+        if (k < 0)
+            return NULL;
+        st = &bd->subs[k];
+        t = st->t;
+        t.parent = -1;
+        st->num_nodes = build_nodes(bd, bd->nodes + st->pos, &t, 0, &st->depth);
+    }
+}
+
+/* Subtree k before subtree j: larger first (it would finish last otherwise), then in tree
+ * order. */
+static int builds_before(const builder *bd, int k, int j)
+{
+    int ck = bd->subs[k].t.end - bd->subs[k].t.begin, cj = bd->subs[j].t.end - bd->subs[j].t.begin;
+    return ck != cj ? ck > cj : k < j;
+}
+
+/* The final index of the node at provisional slot pos (a top node or a subtree's root). */
+static int final_index(const builder *bd, const int *top_pos, const int *top_final, int ntop,
+                       int pos)
+{
+    int lo = 0, hi = bd->nsubs - 1;
+    while (lo <= hi) { /* subtrees are in slot order */
+        int mid = (lo + hi) / 2;
+        if (bd->subs[mid].pos == pos)
+            return bd->subs[mid].final;
+        if (bd->subs[mid].pos < pos)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
+    }
+    lo = 0;
+    hi = ntop - 1;
+    while (lo <= hi) {
+        int mid = (lo + hi) / 2;
+        if (top_pos[mid] == pos)
+            return top_final[mid];
+        if (top_pos[mid] < pos)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
+    }
+    return -1; /* not reached: every slot referred to is one of them */
+}
+
+/* Closes the gaps the subtrees left in bd->nodes[0, slots): each node moves to where the
+ * one-thread build puts it, and the second-child indices follow. Returns the node count, or
+ * -1 when out of memory. */
+static int close_gaps(builder *bd, int slots)
+{
+    int *top_pos = malloc((size_t)(bd->nsubs + 1) * 2 * sizeof *top_pos), *top_final;
+    int pos = 0, k = 0, t = 0, ntop = 0, next = 0;
+    if (!top_pos)
+        return -1;
+    top_final = top_pos + bd->nsubs + 1;
+    while (pos < slots) { /* where each piece goes */
+        if (k < bd->nsubs && bd->subs[k].pos == pos) {
+            bd->subs[k].final = next;
+            next += bd->subs[k].num_nodes;
+            pos += 2 * (bd->subs[k].t.end - bd->subs[k].t.begin) - 1;
+            k++;
+        } else {
+            top_pos[ntop] = pos;
+            top_final[ntop++] = next++;
+            pos++;
+        }
+    }
+    for (pos = k = 0; pos < slots;) { /* move them, left to right: never over one to move */
+        if (k < bd->nsubs && bd->subs[k].pos == pos) {
+            const subtree *st = &bd->subs[k++];
+            cw_bvh_node *dst = bd->nodes + st->final;
+            memmove(dst, bd->nodes + pos, (size_t)st->num_nodes * sizeof *dst);
+            for (int i = 0; i < st->num_nodes; i++)
+                if (dst[i].count <= 0)
+                    dst[i].start += st->final;
+            pos += 2 * (st->t.end - st->t.begin) - 1;
+        } else {
+            cw_bvh_node *dst = bd->nodes + top_final[t++];
+            *dst = bd->nodes[pos++];
+            if (dst->count <= 0)
+                dst->start = final_index(bd, top_pos, top_final, ntop, dst->start);
+        }
+    }
+    free(top_pos);
+    return next;
+}
+
+/* Builds the nodes over bd->w[0, n) on bd->threads threads (see the top of this file).
+ * Returns the node count, or -1 when out of memory; sets *depth. */
+static int build_parallel(builder *bd, const task *root, int *depth)
+{
+    pthread_t tid[CW_BVH_MAX_THREADS];
+    int started[CW_BVH_MAX_THREADS], slots, num_nodes = -1;
+    if (pthread_mutex_init(&bd->lock, NULL) != 0)
+        return build_nodes(bd, bd->nodes, root, 0, depth);
+    bd->cutoff = bd->max_leaf > BVH_COINCIDENT_LEAF ? bd->max_leaf : BVH_COINCIDENT_LEAF;
+    if (root->end / (PAR_SUBTREES * bd->threads) > bd->cutoff)
+        bd->cutoff = root->end / (PAR_SUBTREES * bd->threads);
+    slots = build_nodes(bd, bd->nodes, root, 1, depth);
+    if (slots < 0)
+        goto out;
+    bd->order = malloc((size_t)(bd->nsubs > 0 ? bd->nsubs : 1) * sizeof *bd->order);
+    if (!bd->order)
+        goto out;
+    for (int k = 0; k < bd->nsubs; k++) { /* insertion sort: a few dozen subtrees */
+        int j = k;
+        for (; j > 0 && builds_before(bd, k, bd->order[j - 1]); j--)
+            bd->order[j] = bd->order[j - 1];
+        bd->order[j] = k;
+    }
+    for (int k = 1; k < bd->threads; k++)
+        started[k] = pthread_create(&tid[k], NULL, build_subtrees, bd) == 0;
+    build_subtrees(bd); /* this thread too; the others' share if they did not start */
+    for (int k = 1; k < bd->threads; k++)
+        if (started[k])
+            pthread_join(tid[k], NULL);
+    for (int k = 0; k < bd->nsubs; k++)
+        if (bd->subs[k].depth > *depth)
+            *depth = bd->subs[k].depth;
+    num_nodes = close_gaps(bd, slots);
+out:
+    pthread_mutex_destroy(&bd->lock);
+    free(bd->order);
+    free(bd->subs);
+    return num_nodes;
+}
+
+/* The thread count for a build: threads, or one per online core when threads <= 0, at most
+ * CW_BVH_MAX_THREADS. */
+static int thread_count(int threads)
+{
+    if (threads <= 0) {
+        long cores = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = cores > 0 ? (int)(cores < CW_BVH_MAX_THREADS ? cores : CW_BVH_MAX_THREADS) : 1;
+    }
+    return threads < CW_BVH_MAX_THREADS ? threads : CW_BVH_MAX_THREADS;
+}
+
 int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, size_t errlen)
 {
-    cw_bvh_node *nodes, *shrunk;
-    prim *work;
+    return bvh_build_threads(out, boxes, n, max_leaf, CW_BVH_THREADS, err, errlen);
+}
+
+int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int threads, char *err,
+                      size_t errlen)
+{
+    cw_bvh_node *shrunk;
+    builder bd;
+    task root;
     int *refs;
     memset(out, 0, sizeof *out);
+    memset(&bd, 0, sizeof bd);
     if (n < 0 || n > BVH_MAX_PRIMS) {
         snprintf(err, errlen, "bvh: %d primitives (the most is %d)", n, BVH_MAX_PRIMS);
         return -1;
@@ -323,37 +607,48 @@ int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, si
     refs = malloc((size_t)n * sizeof *refs);
     if (!refs)
         goto out_oom;
-    nodes = malloc((size_t)(2 * n - 1) * sizeof *nodes);
-    if (!nodes)
+    bd.nodes = malloc((size_t)(2 * n - 1) * sizeof *bd.nodes);
+    if (!bd.nodes)
         goto out_free_refs;
-    work = malloc((size_t)n * sizeof *work);
-    if (!work)
+    bd.w = malloc((size_t)n * sizeof *bd.w);
+    if (!bd.w)
         goto out_free_nodes;
 
     for (int i = 0; i < n; i++) {
         for (int a = 0; a < 3; a++) {
-            work[i].lo[a] = boxes[i].lo[a];
-            work[i].hi[a] = boxes[i].hi[a];
+            bd.w[i].lo[a] = boxes[i].lo[a];
+            bd.w[i].hi[a] = boxes[i].hi[a];
         }
-        work[i].idx = i;
-        work[i].pad = 0;
+        bd.w[i].idx = i;
+        bd.w[i].pad = 0;
     }
-    out->num_nodes = build_nodes(nodes, work, n, max_leaf, &out->depth);
+    bd.max_leaf = max_leaf;
+    bd.threads = n >= PAR_MIN_PRIMS ? thread_count(threads) : 1;
+    task_range(&root, bd.w, 0, n);
+    root.depth = 1;
+    root.parent = -1;
+    out->num_nodes = bd.threads > 1 ? build_parallel(&bd, &root, &out->depth)
+                                    : build_nodes(&bd, bd.nodes, &root, 0, &out->depth);
+    if (out->num_nodes < 0) {
+        free(bd.w);
+        goto out_free_nodes;
+    }
     for (int i = 0; i < n; i++)
-        refs[i] = work[i].idx;
-    free(work);
+        refs[i] = bd.w[i].idx;
+    free(bd.w);
 
-    shrunk = realloc(nodes, (size_t)out->num_nodes * sizeof *nodes);
-    out->nodes = shrunk ? shrunk : nodes;
+    shrunk = realloc(bd.nodes, (size_t)out->num_nodes * sizeof *bd.nodes);
+    out->nodes = shrunk ? shrunk : bd.nodes;
     out->refs = refs;
     out->num_refs = n;
     return 0;
 
 out_free_nodes:
-    free(nodes);
+    free(bd.nodes);
 out_free_refs:
     free(refs);
 out_oom:
+    memset(out, 0, sizeof *out);
     snprintf(err, errlen, "bvh: out of memory for %d primitives", n);
     return -1;
 }

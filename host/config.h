@@ -29,6 +29,11 @@
  * cache, instead of the whole file in memory). */
 #define CW_NFF_READ_CHUNK (1L << 18)
 
+/* Threads that build the BVH (0: one per online core), and the most it will use. The tree
+ * does not depend on the count. */
+#define CW_BVH_THREADS 0
+#define CW_BVH_MAX_THREADS 16
+
 /* The preview's default samples per pixel before it stops refining. */
 #define CW_PREVIEW_DEFAULT_SPP 16
 
