@@ -286,7 +286,6 @@ static int parse_polygon(nff_reader *r, int patch)
     int mat;
     double d[6];
     vec3f p[3], nrm[3];
-    scene_triangle tri;
     scene_array *verts = &r->s->poly_verts;
     size_t first = verts->count;
     scene_area area; /* the vertices are not kept together: added one by one */
@@ -306,9 +305,6 @@ static int parse_polygon(nff_reader *r, int patch)
     if ((mat = current_material(r)) < 0)
         return -1;
     begin(r, kw, n);
-    memset(&tri, 0, sizeof tri);
-    tri.material = mat;
-    tri.has_normals = patch;
     scene_area_init(&area);
     for (i = 0; i < n; i++) {
         vec3f q, qn = vec3f_make(0, 0, 0);
@@ -340,12 +336,8 @@ static int parse_polygon(nff_reader *r, int patch)
             p[2] = q;
             nrm[2] = qn;
         }
-        if (i >= 2) {
-            memcpy(tri.p, p, sizeof p);
-            memcpy(tri.n, nrm, sizeof nrm);
-            if (push(r, &r->s->triangles, &tri, sizeof tri) != 0)
-                return -1;
-        }
+        if (i >= 2 && scene_push_triangle(r->s, p, patch ? nrm : NULL, mat) < 0)
+            return oom(r);
     }
     if (scene_area_zero(&area))
         return fail(r, r->ent_line,

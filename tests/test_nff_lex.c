@@ -238,6 +238,7 @@ static int same_scene(const scene *a, const scene *b)
            same_array(&a->lights, &b->lights, sizeof(scene_light)) &&
            same_array(&a->spheres, &b->spheres, sizeof(scene_sphere)) &&
            same_array(&a->triangles, &b->triangles, sizeof(scene_triangle)) &&
+           same_array(&a->tri_normals, &b->tri_normals, sizeof(vec3f)) &&
            same_array(&a->polygons, &b->polygons, sizeof(scene_polygon)) &&
            same_array(&a->poly_verts, &b->poly_verts, sizeof(vec3f)) &&
            same_array(&a->cones, &b->cones, sizeof(scene_cone));

@@ -51,6 +51,7 @@ static void check_pieces(const uint8_t *data, size_t size)
                    s.polygons.count == whole.polygons.count &&
                    s.poly_verts.count == whole.poly_verts.count &&
                    s.cones.count == whole.cones.count && s.lights.count == whole.lights.count &&
+                   s.tri_normals.count == whole.tri_normals.count &&
                    s.materials.count == whole.materials.count &&
                    memcmp(&s.camera, &whole.camera, sizeof s.camera) == 0 &&
                    (s.triangles.count == 0 ||
