@@ -359,6 +359,11 @@ int bvh_collapse4(const bvh *b, bvh4 *out, char *err, size_t errlen)
     }
     collapse(b->nodes, 0, out, &need);
     out->stack_need = need + 1;
+    { /* about a third of the binary count is used: give the rest back */
+        cw_bvh4_node *shrunk = realloc(out->nodes, (size_t)out->num_nodes * sizeof *out->nodes);
+        if (shrunk)
+            out->nodes = shrunk;
+    }
     return 0;
 }
 
