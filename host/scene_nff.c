@@ -135,6 +135,16 @@ static int numbers(nff_reader *r, int first, int n, double *out, const char *fie
 {
     int found = r->lx.ntok - first, i;
     char ctx[96];
+    if (found == n) { /* the common case: n plain decimals in range */
+        for (i = 0; i < n; i++) {
+            double x = r->lx.val[first + i];
+            if (!r->lx.fast[first + i] || !(fabs(x) <= CW_MAX_ABS))
+                break;
+            out[i] = x;
+        }
+        if (i == n)
+            return 0;
+    }
     for (i = 0; i < found && i < n; i++)
         if (number(r, first + i, &out[i]) != 0)
             return -1;
