@@ -27,7 +27,7 @@
 #include "config.h"
 
 #define MAX_BINS 16           /* per axis; a node of fewer primitives gets as many bins as it has */
-#define PAR_BIN_MIN (1 << 14) /* a top node of fewer primitives is binned on one thread */
+#define PAR_BIN_MIN (1 << 14) /* primitives per thread when a top node is binned in parallel */
 
 typedef struct {
     float lo[3], hi[3];
@@ -336,7 +336,8 @@ int sah_build_nodes(sah_builder *bd, cw_bvh_node *nodes, const sah_task *root, i
         if (!coincident && t.depth + 1 + median_levels(count - 1, max_leaf) <= BVH_MAX_DEPTH) {
             float scale[3];
             int split = 0, nb = count < MAX_BINS ? count : MAX_BINS;
-            int threads = top && count >= PAR_BIN_MIN ? bd->threads : 1;
+            int threads = top ? count / PAR_BIN_MIN : 1; /* enough work for each */
+            threads = threads < 1 ? 1 : (threads > bd->threads ? bd->threads : threads);
             double cost = best_split(w, t.begin, t.end, t.clo, t.chi, box_area(t.lo, t.hi), nb,
                                      threads, scale, &axis, &split);
             if (cost < C_ISECT * count || (count > max_leaf && cost < INFINITY)) {
