@@ -1,7 +1,9 @@
 /* The NFF reader (Eric Haines' Neutral File Format, as written by the SPD generators).
  *
  * Line-based: every entity keeps its numbers on its own line(s), which is what tells
- * `l x y z` from `l x y z r g b`. `#` starts a comment anywhere on a line.
+ * `l x y z` from `l x y z r g b`. `#` starts a comment anywhere on a line. The lines, their
+ * tokens and the values of plain decimals come from scene_nff_lex.c (which reads a file in
+ * pieces); this file gives them meaning.
  *
  * Mapping into the scene model (fixed, so that images match other renderers):
  *   f r g b Kd Ks Shine T ior  ->  kd = Kd*(r,g,b), ka = kd, ks = km = (Ks,Ks,Ks),
