@@ -227,7 +227,7 @@ FUZZ_CFLAGS  := -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefin
                 -fno-sanitize-recover=all
 # Each target links the scene model and its one reader, nothing else (no cJSON for NFF).
 FUZZ_SRC       := host/scene.c host/scene_geom.c host/scene_io.c host/sys.c
-FUZZ_SRC_nff   := $(FUZZ_SRC) host/scene_nff.c
+FUZZ_SRC_nff   := $(FUZZ_SRC) host/scene_nff.c host/scene_nff_lex.c
 FUZZ_SRC_json  := $(FUZZ_SRC) host/scene_json.c host/scene_json_value.c
 FUZZ_LIBS_json  = $(shell pkg-config --libs libcjson 2>/dev/null)
 FUZZ_HEADERS   := tests/fuzz/fuzz_check.h host/config.h host/sys.h $(wildcard host/scene*.h)

@@ -46,6 +46,10 @@ typedef struct {
  * boxes need not contain them. Returns 0, or -1 with a message in err (out of memory,
  * n or max_leaf out of range); on failure *out is an empty tree. */
 int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, size_t errlen);
+/* bvh_build on `threads` threads (<= 0: one per online core; bvh_build takes CW_BVH_THREADS
+ * from config.h). The tree is the same, bit for bit, for every thread count. */
+int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int threads, char *err,
+                      size_t errlen);
 void bvh_free(bvh *b);
 
 /* SAH cost of a built tree: the sum over nodes of area(node) / area(root) times C_trav = 1

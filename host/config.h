@@ -32,6 +32,15 @@
 #define CW_MAX_WRITE_THREADS 8
 #define CW_PNG_PIECE_BYTES 65536
 
+/* The NFF reader reads its file this many bytes at a time (a window that stays in the
+ * cache, instead of the whole file in memory). */
+#define CW_NFF_READ_CHUNK (1L << 18)
+
+/* Threads that build the BVH (0: one per online core), and the most it will use. The tree
+ * does not depend on the count. */
+#define CW_BVH_THREADS 0
+#define CW_BVH_MAX_THREADS 16
+
 /* The preview's default samples per pixel before it stops refining. */
 #define CW_PREVIEW_DEFAULT_SPP 16
 

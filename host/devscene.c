@@ -191,7 +191,7 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
     }
     ds->sph = calloc(s->spheres.count + 1, sizeof *ds->sph);
     ds->tri = calloc(s->triangles.count + 1, sizeof *ds->tri);
-    ds->normals = calloc(3 * s->triangles.count + 1, sizeof *ds->normals);
+    ds->normals = calloc(s->tri_normals.count + 1, sizeof *ds->normals);
     ds->pg = calloc(s->polygons.count + 1, sizeof *ds->pg);
     ds->verts = calloc(s->poly_verts.count + 1, sizeof *ds->verts);
     ds->nverts = (int)s->poly_verts.count;
@@ -221,6 +221,7 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
     }
     for (i = 0; i < s->triangles.count; i++) {
         const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
+        const vec3f *n;
         if (scene_triangle_degenerate(st))
             continue; /* no area, no normal */
         cw_triangle *t = &ds->tri[ds->ntri];
@@ -231,10 +232,10 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
         t->p2 = devscene_f4(st->p[2], 0);
         t->material = st->material;
         t->normals = -1;
-        if (st->has_normals) {
+        if ((n = scene_triangle_normals(s, st)) != NULL) {
             t->normals = ds->nnorm;
             for (k = 0; k < 3; k++)
-                ds->normals[ds->nnorm++] = devscene_f4(st->n[k], 0);
+                ds->normals[ds->nnorm++] = devscene_f4(n[k], 0);
         }
         for (k = 0; k < 3; k++)
             box_add_point(b.lo, b.hi, st->p[k].x, st->p[k].y, st->p[k].z);
@@ -334,8 +335,11 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
 {
     int i;
-    if (bvh_build(&ds->tree, ds->boxes, ds->nbox, 4, err, errlen) != 0 ||
-        bvh_collapse4(&ds->tree, &ds->tree4, err, errlen) != 0)
+    if (bvh_build(&ds->tree, ds->boxes, ds->nbox, 4, err, errlen) != 0)
+        return -1;
+    free(ds->boxes); /* the builder has its own copy of what it needs */
+    ds->boxes = NULL;
+    if (bvh_collapse4(&ds->tree, &ds->tree4, err, errlen) != 0)
         return -1;
     if (ds->tree4.stack_need > CW_BVH_STACK) {
         snprintf(err, errlen,
@@ -350,5 +354,12 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
     }
     for (i = 0; i < ds->tree.num_refs; i++)
         ds->refs[i] = ds->box_ref[ds->tree.refs[i]];
+    /* only the kernels' arrays stay: the binary tree and the box map have served */
+    free(ds->box_ref);
+    ds->box_ref = NULL;
+    free(ds->tree.nodes);
+    free(ds->tree.refs);
+    ds->tree.nodes = NULL;
+    ds->tree.refs = NULL;
     return 0;
 }

@@ -21,13 +21,13 @@ typedef struct {
     cw_cone *cones;
     cw_light *lights;
     cw_material *mats;
-    bvh_box *boxes;
-    int *box_ref; /* box i bounds primitive box_ref[i] (a CW_REF) */
-    int *refs;    /* BVH leaf entries as CW_REFs */
-    int *bands;   /* edge bands of large polygons (cw_polygon) */
+    bvh_box *boxes; /* until the BVH is built */
+    int *box_ref;   /* box i bounds primitive box_ref[i] (a CW_REF); until the BVH is built */
+    int *refs;      /* BVH leaf entries as CW_REFs */
+    int *bands;     /* edge bands of large polygons (cw_polygon) */
     size_t nbands, bands_cap;
     int nsph, ntri, nnorm, npg, nverts, ncone, nbox;
-    bvh tree;
+    bvh tree; /* the binary tree: after devscene_build_bvh only its counts and depth */
     bvh4 tree4;
     int dropped;      /* primitives left out as degenerate */
     int mirrors;      /* some material has km > 0 */
@@ -54,7 +54,8 @@ cw_float4 devscene_f4(vec3f v, float w);
 int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen);
 
 /* Builds the BVH over the boxes, collapses it to the 4-wide tree the kernels traverse and
- * turns its leaf entries into CW_REFs. Returns 0, or -1 with err. */
+ * turns its leaf entries into CW_REFs; then frees what only the build needed (the boxes,
+ * the box map, the binary tree's arrays). Returns 0, or -1 with err. */
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen);
 
 void devscene_free(devscene *ds);

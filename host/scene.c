@@ -33,6 +33,7 @@ void scene_free(scene *s)
     array_free(&s->lights);
     array_free(&s->spheres);
     array_free(&s->triangles);
+    array_free(&s->tri_normals);
     array_free(&s->polygons);
     array_free(&s->poly_verts);
     array_free(&s->cones);
@@ -54,6 +55,29 @@ long scene_push(scene_array *a, const void *elem, size_t elem_size)
     }
     memcpy((char *)a->data + a->count * elem_size, elem, elem_size);
     return (long)a->count++;
+}
+
+long scene_push_triangle(scene *s, const vec3f p[3], const vec3f *n, int material)
+{
+    scene_triangle t;
+    memcpy(t.p, p, sizeof t.p);
+    t.normals = 0;
+    t.material = material;
+    if (n) {
+        long first = (long)s->tri_normals.count;
+        if (first > 0x7ffffff0L) /* the index must fit an int */
+            return -1;
+        for (int k = 0; k < 3; k++)
+            if (scene_push(&s->tri_normals, &n[k], sizeof n[k]) < 0)
+                return -1;
+        t.normals = (int)first + 1;
+    }
+    return scene_push(&s->triangles, &t, sizeof t);
+}
+
+const vec3f *scene_triangle_normals(const scene *s, const scene_triangle *t)
+{
+    return t->normals > 0 ? &SCENE_AT(s->tri_normals, vec3f, (size_t)(t->normals - 1)) : NULL;
 }
 
 /* Sets s->name to the base name of path without its extension. */
@@ -146,13 +170,17 @@ int scene_check(const scene *s, char *err, size_t errlen)
     }
     for (i = 0; i < s->triangles.count; i++) {
         const scene_triangle *t = &SCENE_AT(s->triangles, scene_triangle, i);
+        const vec3f *n;
         int k;
+        if (t->normals < 0 || (t->normals > 0 && (size_t)t->normals + 2 > s->tri_normals.count))
+            return fail_item(err, errlen, name, "triangle", i, "has invalid vertex normals");
+        n = scene_triangle_normals(s, t);
         for (k = 0; k < 3; k++)
-            if (!finite3(t->p[k]) || (t->has_normals && !finite3(t->n[k])))
+            if (!finite3(t->p[k]) || (n && !finite3(n[k])))
                 return fail_item(err, errlen, name, "triangle", i, "has non-finite values");
-        if (t->has_normals)
+        if (n)
             for (k = 0; k < 3; k++)
-                if (!(vec3f_length(t->n[k]) > 0.0f))
+                if (!(vec3f_length(n[k]) > 0.0f))
                     return fail_item(err, errlen, name, "triangle", i, "has a zero vertex normal");
         if (check_material_index(name, t->material, nm, "triangle", i, err, errlen) != 0)
             return -1;

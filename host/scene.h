@@ -52,8 +52,8 @@ typedef struct {
 
 typedef struct {
     vec3f p[3];
-    vec3f n[3]; /* vertex normals, used when has_normals */
-    int has_normals;
+    int normals; /* smooth: 1 + index of the first of its three vertex normals in
+                  * scene.tri_normals (scene_triangle_normals); 0: flat */
     int material;
 } scene_triangle;
 
@@ -83,13 +83,14 @@ typedef struct {
     vec3f background;
     vec3f ambient;
 
-    scene_array materials;  /* scene_material */
-    scene_array lights;     /* scene_light */
-    scene_array spheres;    /* scene_sphere */
-    scene_array triangles;  /* scene_triangle */
-    scene_array polygons;   /* scene_polygon */
-    scene_array poly_verts; /* vec3f */
-    scene_array cones;      /* scene_cone: open cones and cylinders */
+    scene_array materials;   /* scene_material */
+    scene_array lights;      /* scene_light */
+    scene_array spheres;     /* scene_sphere */
+    scene_array triangles;   /* scene_triangle */
+    scene_array tri_normals; /* vec3f: the vertex normals of smooth triangles, three each */
+    scene_array polygons;    /* scene_polygon */
+    scene_array poly_verts;  /* vec3f */
+    scene_array cones;       /* scene_cone: open cones and cylinders */
 } scene;
 
 #define SCENE_AT(arr, type, i) (((type *)(arr).data)[i])
@@ -104,6 +105,13 @@ int scene_set_name(scene *s, const char *path);
 
 /* Appends one element of elem_size bytes; returns its index or -1 when out of memory. */
 long scene_push(scene_array *a, const void *elem, size_t elem_size);
+
+/* Appends a smooth triangle with vertex normals n[3] (or a flat one when n is NULL).
+ * Returns its index or -1 when out of memory. */
+long scene_push_triangle(scene *s, const vec3f p[3], const vec3f *n, int material);
+
+/* The three vertex normals of triangle t, or NULL when it is flat. */
+const vec3f *scene_triangle_normals(const scene *s, const scene_triangle *t);
 
 /* Completes a loaded scene for the given image size (width/height may be 0 to keep the
  * scene's own): derives the NFF window, checks that the camera basis is orthonormal.

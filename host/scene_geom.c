@@ -88,7 +88,12 @@ int scene_polygon_plane(const vec3f *v, int n, double normal[3], double *offset,
 
 void scene_area_init(scene_area *a)
 {
-    memset(a, 0, sizeof *a);
+    int k;
+    for (k = 0; k < 3; k++) /* field by field: a memset costs more, once per polygon */
+        a->normal[k] = a->lo[k] = a->hi[k] = 0.0;
+    a->len = 0.0;
+    a->first = a->prev = vec3f_make(0, 0, 0);
+    a->count = 0;
 }
 
 void scene_area_add(scene_area *a, vec3f v)
@@ -99,18 +104,15 @@ void scene_area_add(scene_area *a, vec3f v)
     c[1] = v.y;
     c[2] = v.z;
     if (a->count == 0) {
-        scene_area_init(a);
         a->first = v;
         for (k = 0; k < 3; k++)
             a->lo[k] = a->hi[k] = c[k];
     } else {
         newell_edge(a->normal, a->prev, v);
     }
-    for (k = 0; k < 3; k++) {
-        if (c[k] < a->lo[k])
-            a->lo[k] = c[k];
-        if (c[k] > a->hi[k])
-            a->hi[k] = c[k];
+    for (k = 0; k < 3; k++) { /* without branches: coordinates in a file are in no order */
+        a->lo[k] = c[k] < a->lo[k] ? c[k] : a->lo[k];
+        a->hi[k] = c[k] > a->hi[k] ? c[k] : a->hi[k];
     }
     a->prev = v;
     a->count++;

@@ -2,10 +2,12 @@
  * scene_io.h. */
 #include "scene_io.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "config.h"
 #include "sys.h"
@@ -131,6 +133,11 @@ const char *scene_single_note(double x, char *buf, size_t len)
     return buf;
 }
 
+int scene_fail_nul(const scene_msg *m, long line)
+{
+    return scene_fail(m, line, "unexpected NUL byte (not a text file?)");
+}
+
 /* The checks before any parser: the scene's name, no NUL byte. Then the parser. */
 static int parse_text(scene_text_parser parse, char *buf, size_t len, const char *name, scene *s,
                       char *err, size_t errlen)
@@ -143,7 +150,7 @@ static int parse_text(scene_text_parser parse, char *buf, size_t len, const char
     if (scene_set_name(s, name) != 0)
         return scene_fail(&m, 1, "out of memory");
     if ((nul = memchr(buf, '\0', len)))
-        return scene_fail(&m, scene_line_at(buf, nul), "unexpected NUL byte (not a text file?)");
+        return scene_fail_nul(&m, scene_line_at(buf, nul));
     return parse(buf, len, &m, s);
 }
 
@@ -173,4 +180,53 @@ int scene_parse_file(scene_text_parser parse, const char *path, scene *s, char *
     rc = parse_text(parse, buf, len, path, s, err, errlen);
     free(buf);
     return rc;
+}
+
+int scene_file_open(scene_file *f, const char *path, char *err, size_t errlen)
+{
+    struct stat st;
+    memset(f, 0, sizeof *f);
+    f->path = path;
+    f->err = err;
+    f->errlen = errlen;
+    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0 ||
+        (unsigned long long)st.st_size > (unsigned long long)CW_MAX_FILE_BYTES)
+        return 1;
+    f->f = fopen(path, "rb");
+    return f->f ? 0 : 1;
+}
+
+size_t scene_file_read(scene_file *f, char *dst, size_t n)
+{
+    size_t got;
+    if (f->failed || !f->f)
+        return 0;
+    got = fread(dst, 1, n, f->f);
+    if (got == 0 && ferror(f->f)) {
+        snprintf(f->err, f->errlen, "%s: cannot read: %s", f->path, strerror(errno));
+        f->failed = 1;
+        return 0;
+    }
+    f->total += got;
+    if (f->total > (size_t)CW_MAX_FILE_BYTES) { /* it grew since it was opened */
+        snprintf(f->err, f->errlen, "%s: file too large (%s may have at most %zu bytes)", f->path,
+                 "a scene file", (size_t)CW_MAX_FILE_BYTES);
+        f->failed = 1;
+        return 0;
+    }
+    return got;
+}
+
+int scene_file_oom(scene_file *f)
+{
+    snprintf(f->err, f->errlen, "%s: out of memory", f->path);
+    f->failed = 1;
+    return -1;
+}
+
+void scene_file_close(scene_file *f)
+{
+    if (f->f)
+        fclose(f->f);
+    f->f = NULL;
 }

@@ -434,11 +434,9 @@ static int read_object(const jreader *r, const cJSON *o, int i)
             return -1;
         }
         if (tri) {
-            scene_triangle st;
-            memset(&st, 0, sizeof st);
-            memcpy(st.p, pts, sizeof st.p);
+            vec3f p[3], nv[3], *normals = NULL;
+            memcpy(p, pts, sizeof p);
             free(pts);
-            st.material = mat;
             if ((m = jv_member(o, "normals"))) {
                 vec3f *nrm;
                 int nn;
@@ -447,15 +445,15 @@ static int read_object(const jreader *r, const cJSON *o, int i)
                 if (jv_points(&r->doc, m, sub, 3, 3, &nrm, &nn) != 0)
                     return -1;
                 for (k = 0, e = m->child; k < 3; k++, e = e->next) {
-                    if (vec3f_normalize(nrm[k], &st.n[k]) != 0) {
+                    if (vec3f_normalize(nrm[k], &nv[k]) != 0) {
                         free(nrm);
                         return jv_fail(&r->doc, e, "%s[%d]: the normal is zero", sub, k);
                     }
                 }
                 free(nrm);
-                st.has_normals = 1;
+                normals = nv;
             }
-            return scene_push(&r->s->triangles, &st, sizeof st) < 0 ? jv_oom(&r->doc, o) : 0;
+            return scene_push_triangle(r->s, p, normals, mat) < 0 ? jv_oom(&r->doc, o) : 0;
         } else {
             scene_polygon poly;
             poly.first = (int)r->s->poly_verts.count;

@@ -1,7 +1,9 @@
 /* The NFF reader (Eric Haines' Neutral File Format, as written by the SPD generators).
  *
  * Line-based: every entity keeps its numbers on its own line(s), which is what tells
- * `l x y z` from `l x y z r g b`. `#` starts a comment anywhere on a line.
+ * `l x y z` from `l x y z r g b`. `#` starts a comment anywhere on a line. The lines, their
+ * tokens and the values of plain decimals come from scene_nff_lex.c (which reads a file in
+ * pieces); this file gives them meaning.
  *
  * Mapping into the scene model (fixed, so that images match other renderers):
  *   f r g b Kd Ks Shine T ior  ->  kd = Kd*(r,g,b), ka = kd, ks = km = (Ks,Ks,Ks),
@@ -32,14 +34,10 @@
 #include "config.h"
 #include "scene_geom.h"
 #include "scene_io.h"
-
-#define NFF_MAX_TOKENS 16 /* tokens kept per line; more are only counted */
+#include "scene_nff_lex.h"
 
 typedef struct {
-    char *cur, *end; /* unread part of the NUL-terminated, writable copy of the text */
-    long line;       /* number of the current line (1-based) */
-    char *tok[NFF_MAX_TOKENS];
-    int ntok;    /* tokens on the current line (can exceed NFF_MAX_TOKENS) */
+    nff_lex lx;  /* the text, its current line and that line's tokens */
     int pending; /* the current line is to be handed out again by next_content() */
     int entities;
     const scene_msg *msg; /* where messages go */
@@ -66,53 +64,13 @@ static int fail(nff_reader *r, long line, const char *fmt, ...)
 
 static int oom(nff_reader *r)
 {
-    return fail(r, r->line, "out of memory");
+    return fail(r, r->lx.line, "out of memory");
 }
 
 /* Token t for a message (see scene_shown). */
 static const char *tok_shown(nff_reader *r, const char *t)
 {
     return scene_shown(t, r->shown);
-}
-
-static int is_blank(char c)
-{
-    return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
-}
-
-/* Splits the next line into NUL-terminated tokens, dropping any comment. Returns 0 at the
- * end of the text. */
-static int next_line(nff_reader *r)
-{
-    char *p, *eol;
-    if (r->cur >= r->end)
-        return 0;
-    p = r->cur;
-    eol = memchr(p, '\n', (size_t)(r->end - p));
-    if (!eol)
-        eol = r->end; /* the text is NUL-terminated there */
-    *eol = '\0';
-    r->cur = eol + 1;
-    r->line++;
-    r->ntok = 0;
-    for (;;) {
-        while (is_blank(*p))
-            p++;
-        if (*p == '\0' || *p == '#')
-            break;
-        if (r->ntok < NFF_MAX_TOKENS)
-            r->tok[r->ntok] = p;
-        r->ntok++;
-        while (*p != '\0' && *p != '#' && !is_blank(*p))
-            p++;
-        if (*p == '#') {
-            *p = '\0';
-            break;
-        }
-        if (*p != '\0')
-            *p++ = '\0';
-    }
-    return 1;
 }
 
 /* Moves to the next line with tokens. Returns 0 at the end of the text. */
@@ -122,8 +80,8 @@ static int next_content(nff_reader *r)
         r->pending = 0;
         return 1;
     }
-    while (next_line(r))
-        if (r->ntok > 0)
+    while (nff_lex_next_line(&r->lx))
+        if (r->lx.ntok > 0)
             return 1;
     return 0;
 }
@@ -141,20 +99,20 @@ static void context(const nff_reader *r, char *buf, size_t len)
                  r->ent, r->ent_line);
 }
 
-/* Converts token i: a finite number of magnitude at most CW_MAX_ABS, the whole token. */
-static int number(nff_reader *r, int i, double *out)
+/* Converts token i with strtod and reports what is wrong with it (see number). */
+static int number_slow(nff_reader *r, int i, double *out)
 {
-    const char *t = r->tok[i];
+    const char *t = r->lx.tok[i];
     char *end;
     double x = strtod(t, &end);
     char ctx[96];
     if (end == t || *end != '\0') {
         context(r, ctx, sizeof ctx);
-        return fail(r, r->line, "expected a number %s, found '%s'", ctx, tok_shown(r, t));
+        return fail(r, r->lx.line, "expected a number %s, found '%s'", ctx, tok_shown(r, t));
     }
     if (!isfinite(x) || fabs(x) > CW_MAX_ABS) {
         context(r, ctx, sizeof ctx);
-        return fail(r, r->line, "number '%s' %s is %s", tok_shown(r, t), ctx,
+        return fail(r, r->lx.line, "number '%s' %s is %s", tok_shown(r, t), ctx,
                     isfinite(x) ? "out of range (magnitude above " SCENE_STR(CW_MAX_ABS) ")"
                                 : "not finite");
     }
@@ -162,18 +120,39 @@ static int number(nff_reader *r, int i, double *out)
     return 0;
 }
 
+/* Converts token i: a finite number of magnitude at most CW_MAX_ABS, the whole token. A
+ * plain decimal has its value from the line's scan already (scene_nff_lex.c). */
+static inline int number(nff_reader *r, int i, double *out)
+{
+    if (r->lx.fast[i] && fabs(r->lx.val[i]) <= CW_MAX_ABS) {
+        *out = r->lx.val[i];
+        return 0;
+    }
+    return number_slow(r, i, out);
+}
+
 /* Reads exactly n numbers (named by `fields`) from token `first` on. Non-numbers are
  * reported before a wrong count, so that a missing line reads as such. */
 static int numbers(nff_reader *r, int first, int n, double *out, const char *fields)
 {
-    int found = r->ntok - first, i;
+    int found = r->lx.ntok - first, i;
     char ctx[96];
+    if (found == n) { /* the common case: n plain decimals in range */
+        for (i = 0; i < n; i++) {
+            double x = r->lx.val[first + i];
+            if (!r->lx.fast[first + i] || !(fabs(x) <= CW_MAX_ABS))
+                break;
+            out[i] = x;
+        }
+        if (i == n)
+            return 0;
+    }
     for (i = 0; i < found && i < n; i++)
         if (number(r, first + i, &out[i]) != 0)
             return -1;
     if (found != n) {
         context(r, ctx, sizeof ctx);
-        return fail(r, r->line, "expected %d number%s (%s) %s, found %d", n, n == 1 ? "" : "s",
+        return fail(r, r->lx.line, "expected %d number%s (%s) %s, found %d", n, n == 1 ? "" : "s",
                     fields, ctx, found);
     }
     return 0;
@@ -186,8 +165,8 @@ static int integer(nff_reader *r, int i, double lo, double hi, const char *what,
     if (number(r, i, &x) != 0)
         return -1;
     if (x != floor(x) || x < lo || x > hi)
-        return fail(r, r->line, "%s must be an integer in %.0f..%.0f, found '%s'", what, lo, hi,
-                    tok_shown(r, r->tok[i]));
+        return fail(r, r->lx.line, "%s must be an integer in %.0f..%.0f, found '%s'", what, lo, hi,
+                    tok_shown(r, r->lx.tok[i]));
     *out = (long)x;
     return 0;
 }
@@ -201,7 +180,7 @@ static void begin(nff_reader *r, const char *ent, long n)
 {
     r->ent = ent;
     r->ent_n = n;
-    r->ent_line = r->line;
+    r->ent_line = r->lx.line;
     r->vertex = 0;
 }
 
@@ -236,33 +215,33 @@ static int parse_view(nff_reader *r)
     static const int counts[6] = {3, 3, 3, 1, 1, 2};
     long seen[6] = {0, 0, 0, 0, 0, 0};
     double val[6][3];
-    long v_line = r->line, w = 0, h = 0;
+    long v_line = r->lx.line, w = 0, h = 0;
     char note[64];
     int k, eof = 0;
     scene_camera *c = &r->s->camera;
     vec3f from, at, up;
 
-    if (r->ntok != 1)
-        return fail(r, r->line,
+    if (r->lx.ntok != 1)
+        return fail(r, r->lx.line,
                     "expected nothing after 'v' (its values follow on six lines), found '%s'",
-                    tok_shown(r, r->tok[1]));
+                    tok_shown(r, r->lx.tok[1]));
     for (;;) {
         if (!next_content(r)) {
             eof = 1;
             break;
         }
         for (k = 0; k < 6; k++)
-            if (strcmp(r->tok[0], keys[k]) == 0)
+            if (strcmp(r->lx.tok[0], keys[k]) == 0)
                 break;
         if (k == 6) {
             r->pending = 1; /* the next entity */
             break;
         }
         if (seen[k])
-            return fail(r, r->line,
+            return fail(r, r->lx.line,
                         "second '%s' line in the 'v' block (line %ld); the first is at line %ld",
                         keys[k], v_line, seen[k]);
-        seen[k] = r->line;
+        seen[k] = r->lx.line;
         begin(r, keys[k], 0);
         if (numbers(r, 1, counts[k], val[k], fields[k]) != 0)
             return -1;
@@ -274,13 +253,13 @@ static int parse_view(nff_reader *r)
         if (seen[k])
             continue;
         if (eof)
-            return fail(r, r->line, "file ended inside the 'v' block (line %ld): no '%s' line",
+            return fail(r, r->lx.line, "file ended inside the 'v' block (line %ld): no '%s' line",
                         v_line, keys[k]);
         return fail(
-            r, r->line,
+            r, r->lx.line,
             "the 'v' block (line %ld) has no '%s' line (it needs from, at, up, angle, hither "
             "and resolution), found '%s'",
-            v_line, keys[k], tok_shown(r, r->tok[0]));
+            v_line, keys[k], tok_shown(r, r->lx.tok[0]));
     }
     /* as stored: a float */
     if (!((float)val[3][0] > 0.0f && (float)val[3][0] < 180.0f))
@@ -319,35 +298,31 @@ static int parse_polygon(nff_reader *r, int patch)
     int mat;
     double d[6];
     vec3f p[3], nrm[3];
-    scene_triangle tri;
     scene_array *verts = &r->s->poly_verts;
     size_t first = verts->count;
     scene_area area; /* the vertices are not kept together: added one by one */
 
-    if (r->ntok != 2)
-        return fail(r, r->line, "expected the vertex count after '%s' (%s n), found %d values", kw,
-                    kw, r->ntok - 1);
+    if (r->lx.ntok != 2)
+        return fail(r, r->lx.line, "expected the vertex count after '%s' (%s n), found %d values",
+                    kw, kw, r->lx.ntok - 1);
     begin(r, kw, 0);
     if (number(r, 1, &d[0]) != 0)
         return -1;
     if (d[0] < 3)
-        return fail(r, r->line, "'%s' needs at least 3 vertices, found %s", kw,
-                    tok_shown(r, r->tok[1]));
+        return fail(r, r->lx.line, "'%s' needs at least 3 vertices, found %s", kw,
+                    tok_shown(r, r->lx.tok[1]));
     if (integer(r, 1, 3, CW_MAX_VERTS, patch ? "the 'pp' vertex count" : "the 'p' vertex count",
                 &n) != 0)
         return -1;
     if ((mat = current_material(r)) < 0)
         return -1;
     begin(r, kw, n);
-    memset(&tri, 0, sizeof tri);
-    tri.material = mat;
-    tri.has_normals = patch;
     scene_area_init(&area);
     for (i = 0; i < n; i++) {
         vec3f q, qn = vec3f_make(0, 0, 0);
         if (!next_content(r))
             return fail(
-                r, r->line,
+                r, r->lx.line,
                 "file ended inside '%s %ld' (line %ld): expected %ld vertex lines, found %ld", kw,
                 n, r->ent_line, n, i);
         r->vertex = i + 1;
@@ -356,8 +331,8 @@ static int parse_polygon(nff_reader *r, int patch)
         q = v3(d);
         scene_area_add(&area, q);
         if (patch && vec3f_normalize(v3(d + 3), &qn) != 0)
-            return fail(r, r->line, "zero normal for vertex %ld of 'pp %ld' (line %ld)", i + 1, n,
-                        r->ent_line);
+            return fail(r, r->lx.line, "zero normal for vertex %ld of 'pp %ld' (line %ld)", i + 1,
+                        n, r->ent_line);
         if (!patch && n > 3) {
             if (push(r, verts, &q, sizeof q) != 0)
                 return -1;
@@ -373,18 +348,14 @@ static int parse_polygon(nff_reader *r, int patch)
             p[2] = q;
             nrm[2] = qn;
         }
-        if (i >= 2) {
-            memcpy(tri.p, p, sizeof p);
-            memcpy(tri.n, nrm, sizeof nrm);
-            if (push(r, &r->s->triangles, &tri, sizeof tri) != 0)
-                return -1;
-        }
+        if (i >= 2 && scene_push_triangle(r->s, p, patch ? nrm : NULL, mat) < 0)
+            return oom(r);
     }
     if (scene_area_zero(&area))
         return fail(r, r->ent_line,
                     "'%s %ld' has zero area: its vertices are collinear or coincide (the polygon "
                     "ends at line %ld)",
-                    kw, n, r->line);
+                    kw, n, r->lx.line);
     if (!patch && n > 3) {
         scene_polygon poly;
         poly.first = (int)first;
@@ -403,14 +374,14 @@ static int parse_cone(nff_reader *r)
     double d[8];
     int mat;
     begin(r, "c", 0);
-    if (r->ntok == 9) {
+    if (r->lx.ntok == 9) {
         if (numbers(r, 1, 8, d, "base x y z r, apex x y z r") != 0)
             return -1;
-    } else if (r->ntok == 1) {
+    } else if (r->lx.ntok == 1) {
         int i;
         for (i = 0; i < 2; i++) {
             if (!next_content(r))
-                return fail(r, r->line,
+                return fail(r, r->lx.line,
                             "file ended inside 'c' (line %ld): expected 2 lines (base x y z r, "
                             "apex x y z r), found %d",
                             r->ent_line, i);
@@ -419,10 +390,10 @@ static int parse_cone(nff_reader *r)
                 return -1;
         }
     } else {
-        return fail(r, r->line,
+        return fail(r, r->lx.line,
                     "expected nothing after 'c' (base and apex on the next two lines) or 8 numbers "
                     "(base x y z r apex x y z r), found %d",
-                    r->ntok - 1);
+                    r->lx.ntok - 1);
     }
     if ((mat = current_material(r)) < 0)
         return -1;
@@ -432,21 +403,21 @@ static int parse_cone(nff_reader *r)
     cone.apex_radius = (float)d[7];
     cone.material = mat;
     if (cone.base.x == cone.apex.x && cone.base.y == cone.apex.y && cone.base.z == cone.apex.z)
-        return fail(r, r->line, "cone base and apex coincide (cone at line %ld)", r->ent_line);
+        return fail(r, r->lx.line, "cone base and apex coincide (cone at line %ld)", r->ent_line);
     return push(r, &r->s->cones, &cone, sizeof cone);
 }
 
 static int parse_entity(nff_reader *r, long *v_line)
 {
-    const char *kw = r->tok[0];
+    const char *kw = r->lx.tok[0];
     double d[8];
     r->entities++;
     begin(r, kw, 0);
     if (strcmp(kw, "v") == 0) {
         if (*v_line)
-            return fail(r, r->line, "second 'v' viewpoint block (the first is at line %ld)",
+            return fail(r, r->lx.line, "second 'v' viewpoint block (the first is at line %ld)",
                         *v_line);
-        *v_line = r->line;
+        *v_line = r->lx.line;
         return parse_view(r);
     }
     if (strcmp(kw, "b") == 0) {
@@ -457,12 +428,12 @@ static int parse_entity(nff_reader *r, long *v_line)
     }
     if (strcmp(kw, "l") == 0) {
         scene_light l;
-        int n = r->ntok - 1, i;
+        int n = r->lx.ntok - 1, i;
         for (i = 0; i < n && i < 6; i++)
             if (number(r, 1 + i, &d[i]) != 0)
                 return -1;
         if (n != 3 && n != 6)
-            return fail(r, r->line,
+            return fail(r, r->lx.line,
                         "expected 3 numbers after 'l' (x y z) or 6 (x y z r g b), found %d", n);
         l.position = v3(d);
         /* NaN marks "no colour" until the number of lights is known (input is never NaN) */
@@ -476,7 +447,7 @@ static int parse_entity(nff_reader *r, long *v_line)
             return -1;
         for (i = 0; i < 3; i++)
             if (fabs(d[3] * d[i]) > CW_MAX_ABS)
-                return fail(r, r->line,
+                return fail(r, r->lx.line,
                             "the diffuse colour Kd * (r g b) = %g is out of range (magnitude "
                             "above " SCENE_STR(CW_MAX_ABS) ")",
                             d[3] * d[i]);
@@ -498,7 +469,7 @@ static int parse_entity(nff_reader *r, long *v_line)
         if (numbers(r, 1, 4, d, "cx cy cz r") != 0)
             return -1;
         if ((float)d[3] == 0.0f) /* as stored: a float */
-            return fail(r, r->line, "sphere radius must not be zero, found %.10g%s", d[3],
+            return fail(r, r->lx.line, "sphere radius must not be zero, found %.10g%s", d[3],
                         scene_single_note(d[3], r->shown, sizeof r->shown));
         if ((mat = current_material(r)) < 0)
             return -1;
@@ -517,31 +488,34 @@ static int parse_entity(nff_reader *r, long *v_line)
         int view_key = strcmp(kw, "from") == 0 || strcmp(kw, "at") == 0 || strcmp(kw, "up") == 0 ||
                        strcmp(kw, "angle") == 0 || strcmp(kw, "hither") == 0 ||
                        strcmp(kw, "resolution") == 0;
-        return fail(r, r->line, "unknown entity '%s' (expected one of v b l f s p pp c #)%s",
+        return fail(r, r->lx.line, "unknown entity '%s' (expected one of v b l f s p pp c #)%s",
                     tok_shown(r, kw), view_key ? "; it belongs inside a 'v' block" : "");
     }
 }
 
-/* A scene_text_parser: parses buf[0..len). */
-static int parse_buffer(char *buf, size_t len, const scene_msg *m, scene *s)
+static void reader_init(nff_reader *r, const scene_msg *m, scene *s)
 {
-    nff_reader r;
+    memset(r, 0, sizeof *r);
+    r->msg = m;
+    r->s = s;
+    r->material = -1;
+}
+
+/* Parses the lines of r->lx to the end. */
+static int parse_lines(nff_reader *r)
+{
+    scene *s = r->s;
     long v_line = 0;
     size_t i, nl;
-    memset(&r, 0, sizeof r);
-    r.cur = buf + scene_bom_len(buf, len); /* after a UTF-8 byte order mark */
-    r.end = buf + len;
-    r.msg = m;
-    r.s = s;
-    r.material = -1;
 
-    while (next_content(&r))
-        if (parse_entity(&r, &v_line) != 0)
+    while (next_content(r))
+        if (parse_entity(r, &v_line) != 0)
             return -1;
-    if (r.entities == 0)
-        return fail(&r, r.line, "empty file: no NFF entities (expected one of v b l f s p pp c)");
+    if (r->entities == 0)
+        return fail(r, r->lx.line,
+                    "empty file: no NFF entities (expected one of v b l f s p pp c)");
     if (!v_line)
-        return fail(&r, r.line, "no 'v' viewpoint block");
+        return fail(r, r->lx.line, "no 'v' viewpoint block");
 
     nl = s->lights.count;
     {
@@ -556,12 +530,42 @@ static int parse_buffer(char *buf, size_t len, const scene_msg *m, scene *s)
     return 0;
 }
 
+/* A scene_text_parser: parses buf[0..len). */
+static int parse_buffer(char *buf, size_t len, const scene_msg *m, scene *s)
+{
+    nff_reader r;
+    size_t bom = scene_bom_len(buf, len); /* skip a UTF-8 byte order mark */
+    reader_init(&r, m, s);
+    nff_lex_init(&r.lx, buf + bom, len - bom);
+    return parse_lines(&r);
+}
+
 int nff_parse(const char *text, size_t len, const char *name, scene *s, char *err, size_t errlen)
 {
     return scene_parse_copy(parse_buffer, text, len, name, s, err, errlen);
 }
 
+int nff_load_chunked(const char *path, size_t chunk, scene *s, char *err, size_t errlen)
+{
+    scene_file f;
+    scene_msg m;
+    nff_reader r;
+    int rc = -1;
+    if (scene_file_open(&f, path, err, errlen) != 0) /* not a plain file: read it whole */
+        return scene_parse_file(parse_buffer, path, s, err, errlen);
+    m.name = path;
+    m.err = err;
+    m.errlen = errlen;
+    reader_init(&r, &m, s);
+    if (scene_set_name(s, path) != 0)
+        scene_fail(&m, 1, "out of memory");
+    else if (nff_lex_open(&r.lx, &f, chunk) == 0)
+        rc = nff_lex_finish(&r.lx, parse_lines(&r), &m);
+    scene_file_close(&f);
+    return rc;
+}
+
 int nff_load(const char *path, scene *s, char *err, size_t errlen)
 {
-    return scene_parse_file(parse_buffer, path, s, err, errlen);
+    return nff_load_chunked(path, CW_NFF_READ_CHUNK, s, err, errlen);
 }

@@ -310,6 +310,7 @@ static void write_triangles(FILE *f, const scene *s, size_t *skipped)
             end++;
         for (j = i; j < end; j++) {
             const scene_triangle *t = &SCENE_AT(s->triangles, scene_triangle, j);
+            const vec3f *nrm = scene_triangle_normals(s, t);
             if (!triangle_has_area(t)) {
                 (*skipped)++;
                 continue;
@@ -318,14 +319,14 @@ static void write_triangles(FILE *f, const scene *s, size_t *skipped)
                 fprintf(f, "mesh {\n");
             any = 1;
             /* triangle { p0, p1, p2 } or smooth_triangle { p0, n0, p1, n1, p2, n2 } */
-            fprintf(f, "  %s { ", t->has_normals ? "smooth_triangle" : "triangle");
+            fprintf(f, "  %s { ", nrm ? "smooth_triangle" : "triangle");
             for (k = 0; k < 3; k++) {
                 if (k > 0)
                     fprintf(f, ", ");
                 put3(f, t->p[k]);
-                if (t->has_normals) {
+                if (nrm) {
                     fprintf(f, ", ");
-                    put3(f, t->n[k]);
+                    put3(f, nrm[k]);
                 }
             }
             fprintf(f, " }\n");

@@ -13,6 +13,7 @@
 #include "sys.h"
 
 #include "bvh.h"
+#include "config.h"
 
 /* ======================================================================================== */
 /* Helpers                                                                                  */
@@ -815,6 +816,80 @@ static void test_million_triangles(void **state)
     free(b);
 }
 
+/* ======================================================================================== */
+/* Threads: the same tree, bit for bit, for every thread count                              */
+
+/* Builds b[0..n) on 1 thread and on each count in threads[]; fails unless every tree has the
+ * same bytes (nodes, refs, depth). Returns the one-thread node count. */
+static int same_on_threads(const bvh_box *b, int n, int max_leaf, const char *what)
+{
+    static const int threads[] = {2, 3, CW_BVH_MAX_THREADS};
+    char err[256] = "";
+    bvh one;
+    int nodes;
+    if (bvh_build_threads(&one, b, n, max_leaf, 1, err, sizeof err) != 0)
+        fail_msg("%s: one thread: %s", what, err);
+    for (size_t k = 0; k < sizeof threads / sizeof threads[0]; k++) {
+        bvh t;
+        if (bvh_build_threads(&t, b, n, max_leaf, threads[k], err, sizeof err) != 0)
+            fail_msg("%s: %d threads: %s", what, threads[k], err);
+        if (t.num_nodes != one.num_nodes || t.depth != one.depth || t.num_refs != one.num_refs ||
+            memcmp(t.nodes, one.nodes, (size_t)one.num_nodes * sizeof *one.nodes) != 0 ||
+            memcmp(t.refs, one.refs, (size_t)one.num_refs * sizeof *one.refs) != 0)
+            fail_msg("%s, max_leaf %d: %d threads build another tree (%d nodes, depth %d; one "
+                     "thread: %d nodes, depth %d)",
+                     what, max_leaf, threads[k], t.num_nodes, t.depth, one.num_nodes, one.depth);
+        bvh_free(&t);
+    }
+    nodes = one.num_nodes;
+    bvh_free(&one);
+    return nodes;
+}
+
+static void test_threads_identical(void **state)
+{
+    int n = 100000;
+    bvh_box *b = random_boxes(n, 61, 100.0f, 0.5f);
+    (void)state;
+    same_on_threads(b, n, 4, "uniform");
+    same_on_threads(b, n, 1, "uniform");
+    same_on_threads(b, 40000, 8, "uniform, 40k"); /* just above the parallel threshold */
+    /* clusters of very different density and size: unbalanced SAH splits at the top */
+    tu_rng_seed(62);
+    for (int i = 0; i < n; i++) {
+        float c = (float)(i % 7 == 0 ? 1000 : i % 3) * 10.0f, h = (i % 50) ? 0.01f : 3.0f;
+        set_box(&b[i], c + rnd() * rnd() * 5, rnd() * 5, rnd() * 0.5f, h, h * rnd(), h);
+    }
+    same_on_threads(b, n, 4, "clusters");
+    /* coordinates of +0 and -0 (equal, different bits) mixed: the bins and bounds merged
+     * across threads must keep the one a single pass keeps */
+    for (int i = 0; i < n; i++) {
+        float z = (i % 3) ? 0.0f : -0.0f;
+        set_box(&b[i], (float)(i % 1000), z, (float)(i / 1000), 0.25f, 0.0f, 0.25f);
+        b[i].lo[1] = (i % 5) ? -0.0f : 0.0f;
+        b[i].hi[1] = z;
+    }
+    same_on_threads(b, n, 4, "signed zeros");
+    /* coincident centroids (split by count), a line, NaN and infinite boxes */
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], (float)(i % 3), 1, 1, 0.5f, 0.5f, 0.5f);
+    same_on_threads(b, n, 4, "three points");
+    for (int i = 0; i < n; i++)
+        set_box(&b[i], powf(1.0001f, (float)i), 1, 1, 0.5f, 0.5f, 0.5f);
+    same_on_threads(b, n, 1, "a geometric line");
+    free(b);
+    b = random_boxes(n, 63, 10.0f, 0.5f);
+    for (int i = 0; i < n; i += 7)
+        b[i].lo[i % 3] = NAN;
+    for (int i = 3; i < n; i += 11)
+        b[i].hi[(i + 1) % 3] = INFINITY;
+    for (int i = 1; i < n; i += 17)
+        for (int a = 0; a < 3; a++)
+            b[i].lo[a] = b[i].hi[a] = NAN;
+    same_on_threads(b, n, 4, "NaN and inf mixed in");
+    free(b);
+}
+
 /* Lane i of a cw_float4. */
 static float lane(cw_float4 v, int i)
 {
@@ -927,6 +1002,7 @@ int main(void)
         cmocka_unit_test(test_traversal_boxes),
         cmocka_unit_test(test_sah_quality),
         cmocka_unit_test(test_million_triangles),
+        cmocka_unit_test(test_threads_identical),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

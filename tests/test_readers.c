@@ -159,19 +159,19 @@ static void test_nff_entities(void **state)
     /* p 3 -> flat triangle; pp 3 -> smooth; pp 4 -> two fan triangles */
     assert_int_equal(s.triangles.count, 4);
     t = &SCENE_AT(s.triangles, scene_triangle, 0);
-    assert_int_equal(t->has_normals, 0);
+    assert_null(scene_triangle_normals(&s, t));
     assert_int_equal(t->material, 1);
     assert_vec(t->p[0], 0, 0, 0);
     assert_vec(t->p[1], 1, 0, 0);
     assert_vec(t->p[2], 0, 1, 0);
     t = &SCENE_AT(s.triangles, scene_triangle, 1);
-    assert_int_equal(t->has_normals, 1);
+    assert_non_null(scene_triangle_normals(&s, t));
     assert_vec(t->p[2], 0, 1, 0);
-    assert_vec(t->n[0], 0, 0, 1); /* normalised from (0 0 2) */
-    assert_vec(t->n[1], 0, 0, 1);
-    assert_vec(t->n[2], 1, 0, 0);
+    assert_vec(scene_triangle_normals(&s, t)[0], 0, 0, 1); /* normalised from (0 0 2) */
+    assert_vec(scene_triangle_normals(&s, t)[1], 0, 0, 1);
+    assert_vec(scene_triangle_normals(&s, t)[2], 1, 0, 0);
     t = &SCENE_AT(s.triangles, scene_triangle, 2);
-    assert_int_equal(t->has_normals, 1);
+    assert_non_null(scene_triangle_normals(&s, t));
     assert_vec(t->p[0], 0, 0, 1);
     assert_vec(t->p[1], 1, 0, 1);
     assert_vec(t->p[2], 1, 1, 1);
@@ -179,7 +179,7 @@ static void test_nff_entities(void **state)
     assert_vec(t->p[0], 0, 0, 1); /* (v0, v2, v3) */
     assert_vec(t->p[1], 1, 1, 1);
     assert_vec(t->p[2], 0, 1, 1);
-    assert_vec(t->n[2], 0, 0, 1);
+    assert_vec(scene_triangle_normals(&s, t)[2], 0, 0, 1);
 
     /* p 5 -> polygon */
     assert_int_equal(s.polygons.count, 1);
@@ -592,14 +592,14 @@ static void test_json_all(void **state)
 
     assert_int_equal(s.triangles.count, 2);
     t = &SCENE_AT(s.triangles, scene_triangle, 0);
-    assert_int_equal(t->has_normals, 0);
+    assert_null(scene_triangle_normals(&s, t));
     assert_int_equal(t->material, 0);
     assert_vec(t->p[1], 1, 0, 0);
     t = &SCENE_AT(s.triangles, scene_triangle, 1);
-    assert_int_equal(t->has_normals, 1);
+    assert_non_null(scene_triangle_normals(&s, t));
     assert_int_equal(t->material, 1);
-    assert_vec(t->n[0], 0, 0, 1);
-    assert_vec(t->n[2], 1, 0, 0);
+    assert_vec(scene_triangle_normals(&s, t)[0], 0, 0, 1);
+    assert_vec(scene_triangle_normals(&s, t)[2], 1, 0, 0);
 
     assert_int_equal(s.polygons.count, 1);
     assert_int_equal(SCENE_AT(s.polygons, scene_polygon, 0).count, 5);

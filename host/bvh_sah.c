@@ -1,0 +1,377 @@
+/* The binned SAH build of one tree or subtree (see bvh_sah.h; bvh.c drives it, on one
+ * thread or several).
+ *
+ * The primitives are copied once into a working array (box and input index, 32 bytes
+ * each) that is partitioned in place, node by node, depth-first with an explicit stack,
+ * so that the nodes come out in the depth-first layout the kernels traverse and every
+ * leaf is a contiguous run of the working array. Per node: one pass binning the centroids
+ * on all three axes (MAX_BINS bins, fewer for small nodes), one pass partitioning, which
+ * also computes the two children's box and centroid bounds. Centroids are kept doubled
+ * (lo + hi) and never stored.
+ *
+ * Depth is bounded: a node splits by SAH only while a worst-case split (n - 1 on one side)
+ * would still leave room to finish by median splits within BVH_MAX_DEPTH; otherwise, and
+ * whenever binning finds no split (non-finite or degenerate boxes), it splits at the
+ * median centroid, which halves the count.
+ *
+ * A large node at the top of a parallel build is binned on several threads: each bins a
+ * range, and the bins are merged in range order (a min or max keeps the earlier of equal
+ * values, as one pass in order does), so the split is the one-thread split. */
+#include "bvh_sah.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "box.h"
+#include "config.h"
+
+#define MAX_BINS 16           /* per axis; a node of fewer primitives gets as many bins as it has */
+#define PAR_BIN_MIN (1 << 14) /* primitives per thread when a top node is binned in parallel */
+
+typedef struct {
+    float lo[3], hi[3];
+    int count;
+    int pad;
+} bin;
+
+_Static_assert(sizeof(sah_prim) == 32, "sah_prim is 32 bytes");
+
+/* Bin of a doubled centroid: NaN goes to bin 0, out-of-range values to the end bins. */
+static inline int bin_of(float c, float cmin, float scale, float last)
+{
+    float f = (c - cmin) * scale;
+    f = f > 0.0f ? f : 0.0f;
+    f = f < last ? f : last;
+    return (int)f;
+}
+
+/* Sort key of a doubled centroid for median splits: a total order (NaN first). */
+static inline float centroid_key(const sah_prim *p, int axis)
+{
+    float c = p->lo[axis] + p->hi[axis];
+    return c == c ? c : -INFINITY;
+}
+
+static inline void swap_prims(sah_prim *a, sah_prim *b)
+{
+    sah_prim t = *a;
+    *a = *b;
+    *b = t;
+}
+
+/* Levels of median splits needed below a node of n primitives to reach leaves of at most
+ * max_leaf. */
+static int median_levels(int n, int max_leaf)
+{
+    int k = 0;
+    while (n > max_leaf) {
+        n -= n / 2;
+        k++;
+    }
+    return k;
+}
+
+/* Rearranges w[begin, end) so that w[nth] holds the element of its rank by centroid along
+ * axis, smaller-or-equal ones before it and greater-or-equal after (three-way quickselect,
+ * median-of-three pivot: terminates on any keys, duplicates included). */
+static void select_nth(sah_prim *w, int begin, int end, int nth, int axis)
+{
+    while (end - begin > 1) {
+        float k0 = centroid_key(&w[begin], axis);
+        float k1 = centroid_key(&w[begin + (end - begin) / 2], axis);
+        float k2 = centroid_key(&w[end - 1], axis);
+        float pivot =
+            k0 < k1 ? (k1 < k2 ? k1 : (k0 < k2 ? k2 : k0)) : (k0 < k2 ? k0 : (k1 < k2 ? k2 : k1));
+        int lt = begin, i = begin, gt = end;
+        while (i < gt) {
+            float k = centroid_key(&w[i], axis);
+            if (k < pivot)
+                swap_prims(&w[lt++], &w[i++]);
+            else if (k > pivot)
+                swap_prims(&w[i], &w[--gt]);
+            else
+                i++;
+        }
+        if (nth < lt)
+            end = lt;
+        else if (nth >= gt)
+            begin = gt;
+        else
+            return;
+    }
+}
+
+/* Bins w[begin, end) by doubled centroid on each axis. */
+static void bin_range(const sah_prim *w, int begin, int end, const float clo[3],
+                      const float scale[3], int nb, bin bins[3][MAX_BINS])
+{
+    float last = (float)(nb - 1);
+    for (int a = 0; a < 3; a++) {
+        for (int b = 0; b < nb; b++) {
+            box_empty(bins[a][b].lo, bins[a][b].hi);
+            bins[a][b].count = 0;
+        }
+    }
+    for (int i = begin; i < end; i++) {
+        const sah_prim *p = &w[i];
+        for (int a = 0; a < 3; a++) {
+            bin *b = &bins[a][bin_of(p->lo[a] + p->hi[a], clo[a], scale[a], last)];
+            b->count++;
+            box_grow(b->lo, b->hi, p->lo, p->hi);
+        }
+    }
+}
+
+/* One thread's share of a node's binning. */
+typedef struct {
+    const sah_prim *w;
+    int begin, end, nb;
+    const float *clo, *scale;
+    bin bins[3][MAX_BINS];
+} bin_part;
+
+static void *bin_part_run(void *arg)
+{
+    bin_part *bp = arg;
+    bin_range(bp->w, bp->begin, bp->end, bp->clo, bp->scale, bp->nb, bp->bins);
+    return NULL;
+}
+
+/* bin_range on `threads` threads: each bins a range, and the bins are merged in range order,
+ * so that every count, min and max is what one pass in order gives. */
+static void bin_parallel(const sah_prim *w, int begin, int end, const float clo[3],
+                         const float scale[3], int nb, int threads, bin bins[3][MAX_BINS])
+{
+    bin_part part[CW_BVH_MAX_THREADS];
+    pthread_t tid[CW_BVH_MAX_THREADS];
+    int started[CW_BVH_MAX_THREADS], n = end - begin;
+    for (int k = 1; k < threads; k++) {
+        bin_part *bp = &part[k];
+        bp->w = w;
+        bp->begin = begin + (int)((long long)n * k / threads);
+        bp->end = begin + (int)((long long)n * (k + 1) / threads);
+        bp->nb = nb;
+        bp->clo = clo;
+        bp->scale = scale;
+        started[k] = pthread_create(&tid[k], NULL, bin_part_run, bp) == 0;
+    }
+    bin_range(w, begin, begin + (int)((long long)n / threads), clo, scale, nb, bins);
+    for (int k = 1; k < threads; k++) {
+        if (started[k])
+            pthread_join(tid[k], NULL);
+        else
+            bin_part_run(&part[k]); /* no thread: bin it here */
+        for (int a = 0; a < 3; a++) {
+            for (int b = 0; b < nb; b++) {
+                bins[a][b].count += part[k].bins[a][b].count;
+                box_grow(bins[a][b].lo, bins[a][b].hi, part[k].bins[a][b].lo,
+                         part[k].bins[a][b].hi);
+            }
+        }
+    }
+}
+
+/* Best binned SAH split of w[begin, end) whose doubled centroids span [clo, chi], with
+ * nb bins per axis, binned on `threads` threads. Returns the cost relative to the node area
+ * (C_trav + sum of child area * count / node area), or INFINITY when no bin boundary
+ * separates the primitives; sets *axis, *split (the first bin of the second child) and the
+ * bin scales. */
+static double best_split(const sah_prim *w, int begin, int end, const float clo[3],
+                         const float chi[3], double node_area, int nb, int threads, float scale[3],
+                         int *axis, int *split)
+{
+    bin bins[3][MAX_BINS];
+    double best = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        float ext = chi[a] - clo[a];
+        scale[a] = ext > 0.0f ? (float)nb / ext : 0.0f;
+    }
+    if (threads > 1)
+        bin_parallel(w, begin, end, clo, scale, nb, threads, bins);
+    else
+        bin_range(w, begin, end, clo, scale, nb, bins);
+    for (int a = 0; a < 3; a++) {
+        double right_area[MAX_BINS];
+        int right_count[MAX_BINS];
+        float lo[3], hi[3];
+        int count = 0;
+        if (scale[a] == 0.0f)
+            continue;
+        box_empty(lo, hi);
+        for (int b = nb - 1; b > 0; b--) {
+            count += bins[a][b].count;
+            right_count[b] = count;
+            if (bins[a][b].count > 0)
+                box_grow(lo, hi, bins[a][b].lo, bins[a][b].hi);
+            right_area[b] = count > 0 ? box_area(lo, hi) : 0.0;
+        }
+        box_empty(lo, hi);
+        count = 0;
+        for (int b = 1; b < nb; b++) {
+            double cost;
+            if (bins[a][b - 1].count == 0)
+                continue; /* the same split as the previous boundary */
+            box_grow(lo, hi, bins[a][b - 1].lo, bins[a][b - 1].hi);
+            count += bins[a][b - 1].count;
+            if (right_count[b] == 0)
+                break;
+            cost = box_area(lo, hi) * count + right_area[b] * right_count[b];
+            if (cost < best) {
+                best = cost;
+                *axis = a;
+                *split = b;
+            }
+        }
+    }
+    if (best == INFINITY)
+        return INFINITY;
+    return C_TRAV + C_ISECT * best / node_area;
+}
+
+static void task_empty(sah_task *t)
+{
+    box_empty(t->lo, t->hi);
+    box_empty(t->clo, t->chi);
+}
+
+static inline void task_grow(sah_task *t, const sah_prim *p)
+{
+    float c[3];
+    for (int a = 0; a < 3; a++)
+        c[a] = p->lo[a] + p->hi[a];
+    box_grow(t->lo, t->hi, p->lo, p->hi);
+    box_grow(t->clo, t->chi, c, c);
+}
+
+void sah_task_range(sah_task *t, const sah_prim *w, int begin, int end)
+{
+    t->begin = begin;
+    t->end = end;
+    task_empty(t);
+    for (int i = begin; i < end; i++)
+        task_grow(t, &w[i]);
+}
+
+/* Moves the primitives of t's range in bins below split (along axis) to the front; sets
+ * the ranges and bounds of the two sides. */
+static void partition_bins(sah_prim *w, const sah_task *t, int axis, int split, float scale,
+                           float last, sah_task *left, sah_task *right)
+{
+    int i = t->begin, j = t->end - 1;
+    float cmin = t->clo[axis];
+    task_empty(left);
+    task_empty(right);
+    for (;;) {
+        while (i <= j && bin_of(w[i].lo[axis] + w[i].hi[axis], cmin, scale, last) < split)
+            task_grow(left, &w[i++]);
+        while (i <= j && bin_of(w[j].lo[axis] + w[j].hi[axis], cmin, scale, last) >= split)
+            task_grow(right, &w[j--]);
+        if (i >= j)
+            break;
+        swap_prims(&w[i], &w[j]);
+        task_grow(left, &w[i++]);
+        task_grow(right, &w[j--]);
+    }
+    left->begin = t->begin;
+    left->end = right->begin = i;
+    right->end = t->end;
+}
+
+/* Records task t as a subtree to build later, rooted at slot pos. Returns 0, or -1 when
+ * out of memory. */
+static int defer_subtree(sah_builder *bd, const sah_task *t, int pos)
+{
+    if (bd->nsubs == bd->subs_cap) {
+        int cap = bd->subs_cap ? 2 * bd->subs_cap : 64;
+        sah_subtree *ns = realloc(bd->subs, (size_t)cap * sizeof *ns);
+        if (!ns)
+            return -1;
+        bd->subs = ns;
+        bd->subs_cap = cap;
+    }
+    memset(&bd->subs[bd->nsubs], 0, sizeof bd->subs[0]);
+    bd->subs[bd->nsubs].t = *t;
+    bd->subs[bd->nsubs].pos = pos;
+    bd->nsubs++;
+    return 0;
+}
+
+int sah_build_nodes(sah_builder *bd, cw_bvh_node *nodes, const sah_task *root, int top, int *depth)
+{
+    sah_task stack[BVH_MAX_DEPTH + 2];
+    sah_prim *w = bd->w;
+    int sp = 1, num_nodes = 0, max_leaf = bd->max_leaf;
+    int leaf_cap = max_leaf > BVH_COINCIDENT_LEAF ? max_leaf : BVH_COINCIDENT_LEAF;
+    stack[0] = *root;
+    while (sp > 0) {
+        sah_task t = stack[--sp], *left, *right;
+        int ni = num_nodes++, count = t.end - t.begin, axis = 0, split_done = 0, coincident = 1;
+        cw_bvh_node *node = &nodes[ni];
+        if (t.parent >= 0)
+            nodes[t.parent].start = ni;
+        if (top && count <= bd->cutoff) {
+            if (defer_subtree(bd, &t, ni) != 0)
+                return -1;
+            num_nodes += 2 * count - 2; /* the most its subtree can need */
+            continue;
+        }
+        if (t.depth > *depth)
+            *depth = t.depth;
+        for (int a = 0; a < 3; a++) {
+            node->lo[a] = t.lo[a];
+            node->hi[a] = t.hi[a];
+            if (t.chi[a] > t.clo[a])
+                coincident = 0;
+        }
+        if (count == 1 || (coincident && count <= leaf_cap)) {
+            node->start = t.begin;
+            node->count = count;
+            continue;
+        }
+
+        /* second child below the first, so that the first is made next (index ni + 1) */
+        right = &stack[sp];
+        left = &stack[sp + 1];
+        if (!coincident && t.depth + 1 + median_levels(count - 1, max_leaf) <= BVH_MAX_DEPTH) {
+            float scale[3];
+            int split = 0, nb = count < MAX_BINS ? count : MAX_BINS;
+            int threads = top ? count / PAR_BIN_MIN : 1; /* enough work for each */
+            threads = threads < 1 ? 1 : (threads > bd->threads ? bd->threads : threads);
+            double cost = best_split(w, t.begin, t.end, t.clo, t.chi, box_area(t.lo, t.hi), nb,
+                                     threads, scale, &axis, &split);
+            if (cost < C_ISECT * count || (count > max_leaf && cost < INFINITY)) {
+                partition_bins(w, &t, axis, split, scale[axis], (float)(nb - 1), left, right);
+                /* both sides are non-empty (the bins said so); stay safe all the same */
+                split_done = left->end > t.begin && left->end < t.end;
+            }
+        }
+        if (!split_done) {
+            int mid = t.begin + count / 2;
+            if (!coincident && count <= max_leaf) {
+                node->start = t.begin; /* SAH prefers a leaf, or no split exists */
+                node->count = count;
+                continue;
+            }
+            if (!coincident) { /* median split along the widest centroid extent */
+                float ext = -1.0f;
+                for (int a = 0; a < 3; a++) {
+                    if (t.chi[a] - t.clo[a] > ext) {
+                        ext = t.chi[a] - t.clo[a];
+                        axis = a;
+                    }
+                }
+                select_nth(w, t.begin, t.end, mid, axis);
+            } /* else split by count: any order will do */
+            sah_task_range(left, w, t.begin, mid);
+            sah_task_range(right, w, mid, t.end);
+        }
+        node->start = -1; /* set when the second child is made */
+        node->count = -axis;
+        right->depth = left->depth = t.depth + 1;
+        right->parent = ni;
+        left->parent = -1;
+        sp += 2;
+    }
+    return num_nodes;
+}
