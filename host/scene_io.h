@@ -68,27 +68,4 @@ int scene_parse_file(scene_text_parser parse, const char *path, scene *s, char *
 /* The message for a NUL byte in the text at line (the same from every path). Returns -1. */
 int scene_fail_nul(const scene_msg *m, long line);
 
-/* A scene file read in pieces, for a reader that parses as it reads (the NFF reader keeps a
- * window of the text, not the whole file). Its failures are worded as sys_read_file words
- * them, so that a reader reports the same message either way. */
-typedef struct {
-    FILE *f;
-    const char *path;
-    size_t total; /* bytes read so far */
-    int failed;   /* a read failed, or the file grew past CW_MAX_FILE_BYTES: see err */
-    char *err;
-    size_t errlen;
-} scene_file;
-
-/* Opens path to be read in pieces: when it is a regular file of 1..CW_MAX_FILE_BYTES bytes
- * and opens. Returns 0, or 1 for anything else: scene_parse_file then reads it whole and
- * says what is wrong with it, as always. */
-int scene_file_open(scene_file *f, const char *path, char *err, size_t errlen);
-/* Reads up to n bytes into dst. Returns how many; 0 at the end of the file, or when it
- * fails (f->failed set, "path: reason" in err). */
-size_t scene_file_read(scene_file *f, char *dst, size_t n);
-/* "path: out of memory" in err, as sys_read_file words it. Returns -1. */
-int scene_file_oom(scene_file *f);
-void scene_file_close(scene_file *f);
-
 #endif

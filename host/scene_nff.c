@@ -35,6 +35,7 @@
 #include "scene_geom.h"
 #include "scene_io.h"
 #include "scene_nff_lex.h"
+#include "sys.h"
 
 typedef struct {
     nff_lex lx;  /* the text, its current line and that line's tokens */
@@ -547,11 +548,12 @@ int nff_parse(const char *text, size_t len, const char *name, scene *s, char *er
 
 int nff_load_chunked(const char *path, size_t chunk, scene *s, char *err, size_t errlen)
 {
-    scene_file f;
+    sys_file f;
     scene_msg m;
     nff_reader r;
     int rc = -1;
-    if (scene_file_open(&f, path, err, errlen) != 0) /* not a plain file: read it whole */
+    if (sys_file_open(&f, path, CW_MAX_FILE_BYTES, "a scene file", err, errlen) !=
+        0) /* not a plain file: read it whole */
         return scene_parse_file(parse_buffer, path, s, err, errlen);
     m.name = path;
     m.err = err;
@@ -561,7 +563,7 @@ int nff_load_chunked(const char *path, size_t chunk, scene *s, char *err, size_t
         scene_fail(&m, 1, "out of memory");
     else if (nff_lex_open(&r.lx, &f, chunk) == 0)
         rc = nff_lex_finish(&r.lx, parse_lines(&r), &m);
-    scene_file_close(&f);
+    sys_file_close(&f);
     return rc;
 }
 

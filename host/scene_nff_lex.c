@@ -166,14 +166,14 @@ static int refill(nff_lex *lx)
             char *nb = realloc(lx->buf, cap);
             if (!nb) {
                 lx->stop = NFF_LEX_FAILED;
-                return scene_file_oom(lx->file);
+                return sys_file_oom(lx->file);
             }
             lx->buf = lx->cur = lx->whole = nb;
             lx->end = nb + used;
             lx->cap = cap;
         }
         fresh = lx->end;
-        n = scene_file_read(lx->file, fresh, lx->chunk);
+        n = sys_file_read(lx->file, fresh, lx->chunk);
         if (n == 0) {
             if (lx->file->failed) {
                 lx->stop = NFF_LEX_FAILED;
@@ -201,7 +201,7 @@ static int refill(nff_lex *lx)
     }
 }
 
-int nff_lex_open(nff_lex *lx, scene_file *f, size_t chunk)
+int nff_lex_open(nff_lex *lx, sys_file *f, size_t chunk)
 {
     memset(lx, 0, sizeof *lx);
     lx->file = f;
@@ -209,7 +209,7 @@ int nff_lex_open(nff_lex *lx, scene_file *f, size_t chunk)
     lx->cap = 2 * lx->chunk + 1;
     lx->buf = malloc(lx->cap);
     if (!lx->buf)
-        return scene_file_oom(f);
+        return sys_file_oom(f);
     lx->cur = lx->end = lx->whole = lx->buf;
     *lx->end = '\0';
     if (refill(lx) == 0) /* the first line is whole: skip a byte order mark */
@@ -225,7 +225,7 @@ static int drain(nff_lex *lx, const scene_msg *m, int rc)
     if (lx->cur < lx->end)
         lines += newlines(lx->cur, lx->end);
     while (!lx->eof) {
-        size_t n = scene_file_read(lx->file, lx->buf, lx->cap - 1);
+        size_t n = sys_file_read(lx->file, lx->buf, lx->cap - 1);
         char *q;
         if (n == 0)
             return lx->file->failed ? -1 : rc;

@@ -7,6 +7,7 @@
 #include <stddef.h>
 
 #include "scene_io.h"
+#include "sys.h"
 
 #define NFF_MAX_TOKENS 16 /* tokens kept per line; more are only counted */
 
@@ -22,7 +23,7 @@ typedef struct {
     unsigned char fast[NFF_MAX_TOKENS]; /* token i is a plain decimal whose value is val[i] */
     int ntok;                           /* tokens on the current line (can exceed NFF_MAX_TOKENS) */
     /* a file read in pieces: the window buf[0..cap) holds cur..end */
-    scene_file *file; /* NULL: the whole text is in memory */
+    sys_file *file; /* NULL: the whole text is in memory */
     char *buf;
     size_t cap, chunk; /* window size; bytes read at a time */
     int eof;           /* the file is all read */
@@ -35,7 +36,7 @@ void nff_lex_init(nff_lex *lx, char *text, size_t len);
 
 /* Starts on an open file, read chunk bytes at a time (chunk >= 1), a UTF-8 byte order mark
  * at its start skipped. Returns 0, or -1 when out of memory (the message is in f's err). */
-int nff_lex_open(nff_lex *lx, scene_file *f, size_t chunk);
+int nff_lex_open(nff_lex *lx, sys_file *f, size_t chunk);
 
 /* The result of a reader that parsed lines from nff_lex_open: rc, unless the whole-file
  * reader would have failed first. A read failure wins, then a NUL byte (with its line, even

@@ -196,3 +196,55 @@ int sys_tmp_commit(sys_tmpfile *t, const char *path, char *err, size_t errlen)
     t->tmp = NULL;
     return 0;
 }
+
+int sys_file_open(sys_file *f, const char *path, size_t max_bytes, const char *what, char *err,
+                  size_t errlen)
+{
+    struct stat st;
+    memset(f, 0, sizeof *f);
+    f->path = path;
+    f->err = err;
+    f->errlen = errlen;
+    f->max_bytes = max_bytes;
+    f->what = what;
+    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0 ||
+        (unsigned long long)st.st_size > (unsigned long long)max_bytes)
+        return 1;
+    f->f = fopen(path, "rb");
+    return f->f ? 0 : 1;
+}
+
+size_t sys_file_read(sys_file *f, char *dst, size_t n)
+{
+    size_t got;
+    if (f->failed || !f->f)
+        return 0;
+    got = fread(dst, 1, n, f->f);
+    if (got == 0 && ferror(f->f)) {
+        snprintf(f->err, f->errlen, "%s: cannot read: %s", f->path, strerror(errno));
+        f->failed = 1;
+        return 0;
+    }
+    f->total += got;
+    if (f->total > f->max_bytes) { /* it grew since it was opened */
+        snprintf(f->err, f->errlen, "%s: file too large (%s may have at most %zu bytes)", f->path,
+                 f->what, f->max_bytes);
+        f->failed = 1;
+        return 0;
+    }
+    return got;
+}
+
+int sys_file_oom(sys_file *f)
+{
+    snprintf(f->err, f->errlen, "%s: out of memory", f->path);
+    f->failed = 1;
+    return -1;
+}
+
+void sys_file_close(sys_file *f)
+{
+    if (f->f)
+        fclose(f->f);
+    f->f = NULL;
+}

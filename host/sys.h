@@ -5,6 +5,7 @@
 #define CW_SYS_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 /* Seconds on the monotonic clock (for durations only). */
 double sys_now(void);
@@ -28,6 +29,32 @@ int sys_has_ext(const char *path, const char *ext);
  * /dev/zero is not read forever). Returns 0, or -1 with err. */
 int sys_read_file(const char *path, size_t max_bytes, int stop_at_nul, const char *what, char **out,
                   size_t *outlen, char *err, size_t errlen);
+
+/* A file read in pieces, for a reader that parses as it reads (the NFF reader keeps a
+ * window of the text, not the whole file). Its failures are worded as sys_read_file words
+ * them, so that a reader reports the same message either way. */
+typedef struct {
+    FILE *f;
+    const char *path;
+    size_t total;     /* bytes read so far */
+    size_t max_bytes; /* the most the file may have */
+    const char *what; /* the kind of file, in the size message ("a scene file") */
+    int failed;       /* a read failed, or the file grew past max_bytes: see err */
+    char *err;
+    size_t errlen;
+} sys_file;
+
+/* Opens path to be read in pieces: when it is a regular file of 1..max_bytes bytes and
+ * opens. Returns 0, or 1 for anything else (read it whole with sys_read_file, which says
+ * what is wrong with it). */
+int sys_file_open(sys_file *f, const char *path, size_t max_bytes, const char *what, char *err,
+                  size_t errlen);
+/* Reads up to n bytes into dst. Returns how many; 0 at the end of the file, or when it
+ * fails (f->failed set, "path: reason" in err). */
+size_t sys_file_read(sys_file *f, char *dst, size_t n);
+/* "path: out of memory" in err, as sys_read_file words it. Returns -1. */
+int sys_file_oom(sys_file *f);
+void sys_file_close(sys_file *f);
 
 /* Atomic replacement: write into a temporary file beside the destination (created with
  * O_EXCL, never following a link; mode 0666 & ~umask), then rename it over the
