@@ -66,6 +66,13 @@ typedef struct {
 /* Entries of the kernels' BVH traversal stack (the host checks its tree needs no more). */
 #define CW_BVH_STACK 96
 
+/* The per-pixel kernel's pending rays (pixel.h), with refraction: a queue of CW_PIX_QUEUE
+ * rays for the breadth-first walk of a pixel's ray tree (every level up to depth 6 fits),
+ * and for a subtree that does not fit, a stack of CW_PIX_STACK for a depth-first walk,
+ * which never holds more than max_depth rays (the host checks that CW_MAX_DEPTH fits). */
+#define CW_PIX_QUEUE 32
+#define CW_PIX_STACK 64
+
 /* A node of the 4-wide BVH the kernels traverse, collapsed from the host's binary one
  * (host/bvh.h): the boxes of up to four children side by side, for one 4-wide box test. */
 typedef struct {
@@ -136,6 +143,7 @@ typedef struct {
 #define CW_COUNT_EYE_HITS 2
 #define CW_COUNT_SECONDARY_HITS 3
 #define CW_COUNT_BLOCKED 4
+#define CW_COUNT_DEPTH 5 /* per-pixel kernel: the deepest ray traced (the wavefront's levels) */
 #define CW_NUM_COUNTERS 8
 
 typedef struct {
