@@ -198,12 +198,12 @@ static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err
     return 0;
 }
 
-/* The work-group size for kernel k: 64, or less where the device or the kernel allows
- * less (queried, never assumed). A fixed size also keeps PoCL from specialising (and
- * compiling) the kernel anew for every global size. */
+/* The work-group size for kernel k: CW_GROUP_SIZE (64), or less where the device or the
+ * kernel allows less (queried, never assumed). A fixed size also keeps PoCL from
+ * specialising (and compiling) the kernel anew for every global size. */
 static size_t group_size(const renderer *r, cl_kernel k)
 {
-    size_t kmax = 0, g = 64;
+    size_t kmax = 0, g = CW_GROUP_SIZE;
     if (clGetKernelWorkGroupInfo(k, r->device, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax,
                                  NULL) != CL_SUCCESS ||
         kmax == 0)

@@ -18,43 +18,35 @@
 
 #if CW_PIXEL
 
-/* 2-D launch over a band of rows, as cw_raygen. Each work-group sums its work-items'
- * counts in local memory and adds them to the counters once (CW_COUNT_DEPTH: the
- * maximum), so the counters are not contended per pixel. */
+/* 2-D launch over a band of rows, as cw_raygen, in groups of at most CW_GROUP_SIZE. Each
+ * work-item leaves its counts in its own slot of local memory, and the group's first adds
+ * their sum to the counters (CW_COUNT_DEPTH: the maximum): no atomic per pixel. */
 __kernel void cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights,
                        __global const cw_material *materials, __global float *image,
                        __global int *counters, int row0, int nrows, float sx, float sy)
 {
-    __local int counts[CW_NUM_COUNTERS];
+    __local pix_counts counts[CW_GROUP_SIZE];
     int x = (int)get_global_id(0);
     int y = (int)get_global_id(1);
-    int first = get_local_id(0) == 0 && get_local_id(1) == 0, k;
+    int lid = (int)get_local_id(0), i, k;
+    pix_counts c;
     cw_world w;
-    if (first)
-        for (k = 0; k < CW_NUM_COUNTERS; k++)
-            counts[k] = 0;
-    barrier(CLK_LOCAL_MEM_FENCE);
+    pix_clear(&c);
     if (x < f->nx && y < nrows) {
-        pix_counts c;
         CW_MAKE_WORLD(w);
         c = pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy);
-        for (k = 0; k < CW_NUM_COUNTERS; k++)
-            if (c.n[k] != 0) {
-                if (k == CW_COUNT_DEPTH)
-                    atomic_max(&counts[k], c.n[k]);
-                else
-                    atomic_add(&counts[k], c.n[k]);
-            }
     }
+    counts[lid] = c;
     barrier(CLK_LOCAL_MEM_FENCE);
-    if (first)
-        for (k = 0; k < CW_NUM_COUNTERS; k++)
-            if (counts[k] != 0) {
-                if (k == CW_COUNT_DEPTH)
-                    atomic_max(&counters[k], counts[k]);
-                else
-                    atomic_add(&counters[k], counts[k]);
-            }
+    if (lid != 0)
+        return;
+    for (i = 1; i < (int)get_local_size(0); i++)
+        pix_sum(&c, counts[i]);
+    for (k = 0; k < CW_COUNT_DEPTH; k++)
+        if (pix_counted(k) && c.n[k] != 0)
+            atomic_add(&counters[k], c.n[k]);
+    if (c.n[CW_COUNT_DEPTH] > 1)
+        atomic_max(&counters[CW_COUNT_DEPTH], c.n[CW_COUNT_DEPTH]);
 }
 
 #else

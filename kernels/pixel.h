@@ -44,8 +44,32 @@ typedef struct {
  * shadow rays, and with CW_STATS hits and blocked shadow rays; CW_COUNT_DEPTH is the
  * deepest ray traced (a maximum, not a sum). */
 typedef struct {
-    int n[CW_NUM_COUNTERS];
+    int n[CW_COUNT_DEPTH + 1];
 } pix_counts;
+
+CW_INLINE void pix_clear(pix_counts *c)
+{
+    int k;
+    for (k = 0; k <= CW_COUNT_DEPTH; k++)
+        c->n[k] = 0;
+}
+
+/* Whether counter k is counted in this build (the hits and blocked rays with CW_STATS). */
+CW_INLINE int pix_counted(int k)
+{
+    return CW_STATS || k == CW_COUNT_RAYS || k == CW_COUNT_SHADOWS || k == CW_COUNT_DEPTH;
+}
+
+/* Adds c to *sum (CW_COUNT_DEPTH: the maximum). */
+CW_INLINE void pix_sum(pix_counts *sum, pix_counts c)
+{
+    int k;
+    for (k = 0; k < CW_COUNT_DEPTH; k++)
+        if (pix_counted(k))
+            sum->n[k] += c.n[k];
+    if (c.n[CW_COUNT_DEPTH] > sum->n[CW_COUNT_DEPTH])
+        sum->n[CW_COUNT_DEPTH] = c.n[CW_COUNT_DEPTH];
+}
 
 CW_INLINE pix_ray pix_make(vec3 o, vec3 d, vec3 weight, int depth, int skip)
 {
@@ -169,8 +193,7 @@ CW_INLINE pix_counts pix_trace(const cw_world *w, CW_GLOBAL const cw_frame *f,
     pix_counts c;
     int head = 0, count = 1, k;
 
-    for (k = 0; k < CW_NUM_COUNTERS; k++)
-        c.n[k] = 0;
+    pix_clear(&c);
     queue[0] = pix_make(v3_from4(eye.origin), v3_from4(eye.dir), v3_from4(eye.weight), 1, 0);
     while (count > 0) { /* one level: the rays queued now */
         int n = count;

@@ -63,6 +63,10 @@ typedef struct {
     int band_count;
 } cw_polygon;
 
+/* Work-items per group, at most (the host asks for fewer where a kernel or device allows
+ * fewer): the per-pixel kernel keeps a slot of local memory for each. */
+#define CW_GROUP_SIZE 64
+
 /* Entries of the kernels' BVH traversal stack (the host checks its tree needs no more). */
 #define CW_BVH_STACK 96
 
