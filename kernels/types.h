@@ -74,7 +74,12 @@ typedef struct {
  * rays for the breadth-first walk of a pixel's ray tree (every level up to depth 6 fits),
  * and for a subtree that does not fit, a stack of CW_PIX_STACK for a depth-first walk,
  * which never holds more than max_depth rays (the host checks that CW_MAX_DEPTH fits). */
+#ifndef CW_PIX_QUEUE /* (a test builds with a smaller queue, to walk subtrees depth first) */
 #define CW_PIX_QUEUE 32
+#endif
+#if CW_PIX_QUEUE < 1
+#error "CW_PIX_QUEUE must be at least 1"
+#endif
 #define CW_PIX_STACK 64
 
 /* A node of the 4-wide BVH the kernels traverse, collapsed from the host's binary one

@@ -7,8 +7,11 @@
  * Tolerance: only in scenes with refraction (a material with kt > 0 at depth > 1) may a
  * value differ, by at most REFRACTION_REL_TOL of its size (about 8 ulps): the wavefront
  * adds a level's shading points to a pixel in the order its atomics take, which is the
- * per-pixel kernel's order except now and then (docs/model.md). On failure both images
- * and a diff image (differing pixels in red) go to build/test-output/.
+ * per-pixel kernel's order except now and then (docs/model.md). Trees too wide for the
+ * per-pixel queue (depth 7 or more; forced with a queue of 2 rays) are walked depth first,
+ * which reorders up to a hundred terms of a pixel: DEPTH_FIRST_REL_TOL (about (n - 1) ulps
+ * for n terms). On failure both images and a diff image (differing pixels in red) go to
+ * build/test-output/.
  * Also: the strategy chosen per device, its build option, bad settings, --kernel, the test
  * hooks after a per-pixel render, and progress and cancelling with the per-pixel kernel. */
 #include <dirent.h>
@@ -36,6 +39,7 @@
 #define LARGE_W 256
 #define LARGE_H 257
 #define REFRACTION_REL_TOL 1e-6
+#define DEPTH_FIRST_REL_TOL 2e-5
 #define MAX_SCENES 256
 
 TU_RENDERER_FIXTURE(1)
@@ -187,8 +191,8 @@ static void write_failure(const image *wf, const image *px, const char *path, co
 }
 
 /* Values of a and b that differ (*worst: the largest relative difference); -1 when a
- * value differs by more than REFRACTION_REL_TOL or, without refraction, at all. */
-static int compare_values(const image *a, const image *b, int refraction, long *ndiff,
+ * value differs by more than tol (refraction) or, without refraction, at all. */
+static int compare_values(const image *a, const image *b, int refraction, double tol, long *ndiff,
                           double *worst)
 {
     size_t i, n = (size_t)a->width * (size_t)a->height * 3;
@@ -203,7 +207,7 @@ static int compare_values(const image *a, const image *b, int refraction, long *
         rel = fabs(x - y) / fmax(fabs(x), fabs(y));
         if (!(rel <= *worst))
             *worst = rel;
-        if (!refraction || !(rel <= REFRACTION_REL_TOL))
+        if (!refraction || !(rel <= tol))
             bad = 1;
     }
     return bad ? -1 : 0;
@@ -250,7 +254,7 @@ static int compare_scene(const char *path, const mode *m, int w, int h, int *loa
     scene_free(&s);
     assert_int_equal(wf.width, px.width);
     assert_int_equal(wf.height, px.height);
-    if (compare_values(&wf, &px, refraction, &ndiff, &worst) != 0) {
+    if (compare_values(&wf, &px, refraction, REFRACTION_REL_TOL, &ndiff, &worst) != 0) {
         fprintf(stderr, "  %s (%s, %dx%d): %ld values differ, up to %.3g relative%s\n", path,
                 m->name, w, h, ndiff, worst,
                 refraction ? " (over the refraction tolerance)" : " (no refraction: none may)");
@@ -375,6 +379,59 @@ static void test_progressive(void **state)
     printf("    %s: 3 samples in bands of 7 rows, identical\n", path);
     image_free(&img[0]);
     image_free(&img[1]);
+}
+
+/* Deep refraction: four overlapping glass spheres (km and kt > 0) at depth 10, where a
+ * pixel's ray tree grows wider than the per-pixel queue, so that subtrees are walked depth
+ * first; then again with a queue of 2 rays (CLWHITTED_BUILD_OPTIONS), where nearly every
+ * tree overflows it. Within the refraction tolerance, with the same counts. */
+static void test_deep_refraction(void **state)
+{
+    static const char *const extra[] = {NULL, "-w -DCW_PIX_QUEUE=2"};
+    scene s;
+    int q, glass;
+    (void)state;
+    tu_base_scene(&s, SCENE_PERSPECTIVE, 3, 32, 24);
+    s.camera.l = s.camera.b = -0.4f; /* the spheres fill the view */
+    s.camera.r = s.camera.t = 0.4f;
+    s.max_depth = 10;
+    s.background = vec3f_make(0.2f, 0.3f, 0.5f);
+    s.ambient = vec3f_make(0.2f, 0.2f, 0.2f);
+    glass = tu_add_material(&s, vec3f_make(0.1f, 0.1f, 0.1f), vec3f_make(0.1f, 0.2f, 0.1f),
+                            vec3f_make(0.3f, 0.3f, 0.3f), vec3f_make(0.3f, 0.3f, 0.3f),
+                            vec3f_make(0.7f, 0.7f, 0.7f), 1.5f, 20.0f);
+    tu_add_sphere(&s, -0.5, -0.5, 0, 0.8, glass);
+    tu_add_sphere(&s, 0.5, -0.5, -0.3, 0.8, glass);
+    tu_add_sphere(&s, -0.5, 0.5, -0.6, 0.8, glass);
+    tu_add_sphere(&s, 0.5, 0.5, 0.3, 0.8, glass);
+    tu_add_light(&s, vec3f_make(3, 5, 6), vec3f_make(1, 1, 1));
+    if (scene_finish(&s, 0, 0, 0, err, sizeof err) != 0)
+        fail_msg("%s", err);
+    assert_true(has_refraction(&s));
+    for (q = 0; q < 2; q++) {
+        image wf, px;
+        render_stats swf, spx;
+        long ndiff;
+        double worst;
+        int bad;
+        if (extra[q])
+            assert_int_equal(setenv("CLWHITTED_BUILD_OPTIONS", extra[q], 1), 0);
+        render_with("deep refraction", &s, &modes[4], RENDER_WAVEFRONT, &wf, &swf);
+        render_with("deep refraction", &s, &modes[4], RENDER_PIXEL, &px, &spx);
+        unsetenv("CLWHITTED_BUILD_OPTIONS");
+        bad = compare_values(&wf, &px, 1, DEPTH_FIRST_REL_TOL, &ndiff, &worst);
+        printf("    queue %s: %llu secondary rays for %d pixels, %d passes; %ld values differ, up "
+               "to %.3g relative\n",
+               q ? "2" : "32", spx.secondary_rays, 32 * 24, spx.passes, ndiff, worst);
+        assert_true(spx.secondary_rays > 16 * 32 * 24);
+        if (bad || !same_counts(&swf, &spx)) {
+            write_failure(&wf, &px, "deep-refraction", q ? "queue2" : "queue32");
+            fail_msg("deep refraction (queue %s): the strategies differ", q ? "2" : "32");
+        }
+        image_free(&wf);
+        image_free(&px);
+    }
+    scene_free(&s);
 }
 
 /* ======================================================================================== */
@@ -564,12 +621,19 @@ static int free_scenes(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_choice),        cmocka_unit_test(test_bad_setting),
-        cmocka_unit_test(test_cli),           cmocka_unit_test(test_plain),
-        cmocka_unit_test(test_spp4),          cmocka_unit_test(test_spd),
-        cmocka_unit_test(test_fast),          cmocka_unit_test(test_stats),
-        cmocka_unit_test(test_large),         cmocka_unit_test(test_progressive),
-        cmocka_unit_test(test_hooks_between), cmocka_unit_test(test_progress),
+        cmocka_unit_test(test_choice),
+        cmocka_unit_test(test_bad_setting),
+        cmocka_unit_test(test_cli),
+        cmocka_unit_test(test_plain),
+        cmocka_unit_test(test_spp4),
+        cmocka_unit_test(test_spd),
+        cmocka_unit_test(test_fast),
+        cmocka_unit_test(test_stats),
+        cmocka_unit_test(test_large),
+        cmocka_unit_test(test_progressive),
+        cmocka_unit_test(test_deep_refraction),
+        cmocka_unit_test(test_hooks_between),
+        cmocka_unit_test(test_progress),
     };
     return cmocka_run_group_tests(tests, setup, free_scenes);
 }
