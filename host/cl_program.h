@@ -16,9 +16,10 @@ typedef struct {
 /* The build options of the kernel program, every one decided here: the feature flags
  * from what the scene uses and its depth (reflection and refraction need depth > 1; SPD
  * counting turns transmitters into reflectors too), the settings (fast: the fast relaxed
- * path; stats: ray counting), then CLWHITTED_BUILD_OPTIONS when set. */
+ * path; stats: ray counting; pixel: the per-pixel kernel rather than the wavefront's, each
+ * program holding only its strategy's kernels), then CLWHITTED_BUILD_OPTIONS when set. */
 void clprog_options(const clprog_features *ft, int max_depth, int spd, int fast, int stats,
-                    char *buf, size_t n);
+                    int pixel, char *buf, size_t n);
 
 /* Builds the embedded kernel source with options for dev: from the binary cache when it
  * holds the program, else from source (then caching its binary). When the build fails,

@@ -59,6 +59,10 @@ static void usage(FILE *f)
                                                                                                                        "                        four corners averaged per pixel (default: off)\n"
                                                                                                                        "      --device SPEC     OpenCL device: P:D (platform:device as --list-devices\n"
                                                                                                                        "                        prints) or part of its name (default: the first CPU device)\n"
+                                                                                                                       "      --kernel K        execution strategy: pixel (a work-item traces a pixel's\n"
+                                                                                                                       "                        whole ray tree) or wavefront (a launch per ray depth);\n"
+                                                                                                                       "                        the image is the same (default: auto, pixel on CPU\n"
+                                                                                                                       "                        devices and wavefront on others)\n"
                                                                                                                        "\n"
                                                                                                                        "Information:\n"
                                                                                                                        "      --stats           count rays (eye, shadow, secondary; hits) and print them\n"
@@ -133,7 +137,8 @@ enum {
     OPT_TONEMAP,
     OPT_HALF,
     OPT_PREVIEW,
-    OPT_PREVIEW_SCRIPT
+    OPT_PREVIEW_SCRIPT,
+    OPT_KERNEL
 };
 
 static const struct option cli_longopts[] = {
@@ -142,6 +147,7 @@ static const struct option cli_longopts[] = {
     {"height", required_argument, NULL, 'H'},
     {"depth", required_argument, NULL, 'd'},
     {"device", required_argument, NULL, OPT_DEVICE},
+    {"kernel", required_argument, NULL, OPT_KERNEL},
     {"spp", required_argument, NULL, OPT_SPP},
     {"precision", required_argument, NULL, OPT_PRECISION},
     {"spd", no_argument, NULL, OPT_SPD},
@@ -188,6 +194,21 @@ static int parse_option(int c, const char *arg, cli_options *o)
         return 0;
     case OPT_SPD:
         o->settings.spd = 1;
+        return 0;
+    case OPT_KERNEL:
+        if (strcmp(arg, "auto") == 0)
+            o->settings.strategy = RENDER_AUTO;
+        else if (strcmp(arg, "pixel") == 0)
+            o->settings.strategy = RENDER_PIXEL;
+        else if (strcmp(arg, "wavefront") == 0)
+            o->settings.strategy = RENDER_WAVEFRONT;
+        else {
+            fprintf(
+                stderr,
+                "clwhitted: --kernel expects 'auto', 'pixel' or 'wavefront', got '%s'\n" CLI_HINT,
+                arg);
+            return -1;
+        }
         return 0;
     case OPT_STATS:
         o->settings.stats = 1;

@@ -32,6 +32,9 @@ _Static_assert(sizeof(cw_frame) == 192, "cw_frame layout");
 _Static_assert(sizeof(cw_ray) == 64, "cw_ray layout");
 _Static_assert(sizeof(cw_hit) == 32, "cw_hit layout");
 _Static_assert(sizeof(cw_bvh4_node) == 128, "cw_bvh4_node layout");
+_Static_assert(CW_MAX_DEPTH <= CW_PIX_STACK,
+               "the per-pixel kernel's ray stack holds max_depth rays");
+_Static_assert(CW_COUNT_DEPTH < CW_NUM_COUNTERS, "counters");
 
 int renderer_list_devices(char *err, size_t errlen)
 {
@@ -43,6 +46,7 @@ int renderer_list_devices(char *err, size_t errlen)
 int renderer_create(renderer **out, const char *spec, char *err, size_t errlen)
 {
     renderer *r = calloc(1, sizeof *r);
+    cl_device_type type = 0;
     cl_int e;
     if (!r) {
         snprintf(err, errlen, "out of memory");
@@ -62,6 +66,12 @@ int renderer_create(renderer **out, const char *spec, char *err, size_t errlen)
         rpass_fail(e, "clGetDeviceInfo(memory limits)", r, err, errlen);
         goto out_free;
     }
+    e = clGetDeviceInfo(r->device, CL_DEVICE_TYPE, sizeof type, &type, NULL);
+    if (e != CL_SUCCESS) {
+        rpass_fail(e, "clGetDeviceInfo(CL_DEVICE_TYPE)", r, err, errlen);
+        goto out_free;
+    }
+    r->cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
     r->ctx = clCreateContext(NULL, 1, &r->device, NULL, NULL, &e);
     if (e != CL_SUCCESS) {
         rpass_fail(e, "clCreateContext", r, err, errlen);
@@ -111,13 +121,14 @@ static void release_work(renderer *r)
 
 static void release_program(renderer *r)
 {
-    cl_kernel *ks[4];
+    cl_kernel *ks[5];
     int i;
     ks[0] = &r->k_raygen;
     ks[1] = &r->k_intersect;
     ks[2] = &r->k_shade;
     ks[3] = &r->k_occlude;
-    for (i = 0; i < 4; i++) {
+    ks[4] = &r->k_pixel;
+    for (i = 0; i < 5; i++) {
         if (*ks[i])
             clReleaseKernel(*ks[i]);
         *ks[i] = NULL;
@@ -142,21 +153,14 @@ void renderer_destroy(renderer *r)
 
 /* ---- program ---------------------------------------------------------------------- */
 
-int renderer_ensure_program(renderer *r, char *err, size_t errlen)
+/* The kernels of the program's strategy. */
+static cl_int create_kernels(renderer *r, int strategy)
 {
-    char options[sizeof r->options];
     cl_int e;
-    double t0;
-
-    clprog_options(&r->features, r->host_frame.max_depth, r->settings.spd,
-                   r->settings.precision == RENDER_FAST, r->settings.stats, options,
-                   sizeof options);
-    if (r->program && strcmp(r->options, options) == 0)
-        return 0;
-    release_program(r);
-    t0 = sys_now();
-    if (clprog_build(r->ctx, r->device, r->device_name, options, &r->program, err, errlen) != 0)
-        return -1;
+    if (strategy == RENDER_PIXEL) {
+        r->k_pixel = clCreateKernel(r->program, "cw_pixel", &e);
+        return e;
+    }
     r->k_raygen = clCreateKernel(r->program, "cw_raygen", &e);
     if (e == CL_SUCCESS)
         r->k_intersect = clCreateKernel(r->program, "cw_intersect", &e);
@@ -164,12 +168,32 @@ int renderer_ensure_program(renderer *r, char *err, size_t errlen)
         r->k_shade = clCreateKernel(r->program, "cw_shade", &e);
     if (e == CL_SUCCESS)
         r->k_occlude = clCreateKernel(r->program, "cw_occlude", &e);
+    return e;
+}
+
+int renderer_ensure_program(renderer *r, int strategy, char *err, size_t errlen)
+{
+    char options[sizeof r->options];
+    cl_int e;
+    double t0;
+
+    clprog_options(&r->features, r->host_frame.max_depth, r->settings.spd,
+                   r->settings.precision == RENDER_FAST, r->settings.stats,
+                   strategy == RENDER_PIXEL, options, sizeof options);
+    if (r->program && strcmp(r->options, options) == 0)
+        return 0;
+    release_program(r);
+    t0 = sys_now();
+    if (clprog_build(r->ctx, r->device, r->device_name, options, &r->program, err, errlen) != 0)
+        return -1;
+    e = create_kernels(r, strategy);
     if (e != CL_SUCCESS) {
         rpass_fail(e, "clCreateKernel", r, err, errlen);
         release_program(r);
         return -1;
     }
     snprintf(r->options, sizeof r->options, "%s", options);
+    r->strategy = strategy;
     r->stats.compile_s = sys_now() - t0;
     return 0;
 }
@@ -278,7 +302,7 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     f->num_nodes = ds.tree4.num_nodes;
     f->spd_rays = r->settings.spd;
 
-    if (renderer_ensure_program(r, err, errlen) != 0)
+    if (renderer_ensure_program(r, renderer_strategy(r), err, errlen) != 0)
         goto out_free;
     t0 = sys_now();
     if (upload(r, &r->world.frame, f, 1, sizeof *f, "frame", err, errlen) ||
@@ -302,7 +326,8 @@ out_free:
 
 int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size_t errlen)
 {
-    if (rpass_need_scene(r, err, errlen) || renderer_ensure_program(r, err, errlen))
+    if (rpass_need_scene(r, err, errlen) ||
+        renderer_ensure_program(r, renderer_strategy(r), err, errlen))
         return -1;
     if (sample < 0 || row0 < 0 || nrows < 1 || row0 + nrows > r->host_frame.ny) {
         snprintf(err, errlen, "renderer_trace: sample %d, rows %d..%d outside the %d-row image",
@@ -428,7 +453,8 @@ int renderer_render(renderer *r, image *img, char *err, size_t errlen)
     int spp = r->settings.spp < 1 ? 1 : r->settings.spp, rc;
     double t0;
 
-    if (rpass_need_scene(r, err, errlen) || renderer_ensure_program(r, err, errlen))
+    if (rpass_need_scene(r, err, errlen) ||
+        renderer_ensure_program(r, renderer_strategy(r), err, errlen))
         return -1;
     t0 = sys_now();
     r->stats.eye_rays = r->stats.eye_hits = 0;
@@ -436,6 +462,7 @@ int renderer_render(renderer *r, image *img, char *err, size_t errlen)
     r->stats.secondary_rays = r->stats.secondary_hits = 0;
     r->stats.passes = 0;
     r->stats.raygen_s = r->stats.intersect_s = r->stats.shade_s = r->stats.occlude_s = 0;
+    r->stats.pixel_s = 0;
     if (r->settings.spd)
         rc = render_spd(r, img, err, errlen);
     else
@@ -476,12 +503,29 @@ int renderer_set_settings(renderer *r, const render_settings *st, char *err, siz
         snprintf(err, errlen, "unknown precision setting %d", st->precision);
         return -1;
     }
+    if (st->strategy != RENDER_AUTO && st->strategy != RENDER_WAVEFRONT &&
+        st->strategy != RENDER_PIXEL) {
+        snprintf(err, errlen, "unknown strategy setting %d", st->strategy);
+        return -1;
+    }
     r->settings = *st;
     if (r->have_scene && r->host_frame.spd_rays != (st->spd != 0)) {
         r->host_frame.spd_rays = st->spd != 0;
         return write_frame(r, err, errlen);
     }
     return 0;
+}
+
+int renderer_strategy(const renderer *r)
+{
+    if (r->settings.strategy != RENDER_AUTO)
+        return r->settings.strategy;
+    return r->cpu ? RENDER_PIXEL : RENDER_WAVEFRONT;
+}
+
+const char *render_strategy_name(int strategy)
+{
+    return strategy == RENDER_PIXEL ? "pixel" : strategy == RENDER_WAVEFRONT ? "wavefront" : "auto";
 }
 
 void renderer_get_stats(const renderer *r, render_stats *st)

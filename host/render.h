@@ -28,6 +28,11 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen);
  * kernel build); changing them later rebuilds on the next render. */
 #define RENDER_ROBUST 0 /* watertight, error-bounded intersection and ray offsets */
 #define RENDER_FAST 1   /* fast relaxed math and a plain fixed epsilon */
+/* Execution strategies: the same image either way (docs/model.md says where an ulp may
+ * differ). */
+#define RENDER_AUTO 0      /* per device: per pixel on CPU devices, else the wavefront */
+#define RENDER_WAVEFRONT 1 /* a kernel launch per ray-tree level, rays queued between them */
+#define RENDER_PIXEL 2     /* one work-item traces a pixel sample's whole ray tree */
 typedef struct {
     int spp;       /* samples per pixel, >= 1: 1 = the pixel centre, else a deterministic
                     * stratified pattern (a ceil(sqrt(spp)) grid, cells taken in order) */
@@ -35,10 +40,16 @@ typedef struct {
     int spd;       /* SPD testing mode: rays through the (nx+1)x(ny+1) pixel corners, the
                     * four corners averaged per pixel (spp is then ignored) */
     int stats;     /* count rays on the device (compiled in only when set) */
+    int strategy;  /* RENDER_AUTO (default), RENDER_WAVEFRONT or RENDER_PIXEL */
 } render_settings;
 
 void render_settings_default(render_settings *st);
 int renderer_set_settings(renderer *r, const render_settings *st, char *err, size_t errlen);
+
+/* The strategy the current settings render with on this device: RENDER_WAVEFRONT or
+ * RENDER_PIXEL (never RENDER_AUTO), and its name ("wavefront", "pixel"). */
+int renderer_strategy(const renderer *r);
+const char *render_strategy_name(int strategy);
 
 /* Ray counts (when settings.stats) and times of the last renderer_set_scene and
  * renderer_render, in seconds. */
@@ -50,9 +61,11 @@ typedef struct {
     double compile_s; /* kernel program build (0 when the program was already built) */
     double upload_s;  /* buffer creation and upload */
     double trace_s;   /* last renderer_render */
-    int passes;       /* kernel passes (depth levels) of the last render */
-    /* with settings.stats only (the host then waits for each kernel): time in each kernel */
-    double raygen_s, intersect_s, shade_s, occlude_s;
+    int passes;       /* ray-tree levels traced by the last render, summed over its bands
+                       * and samples (the wavefront's kernel passes; the same count per pixel) */
+    /* with settings.stats only (the host then waits for each kernel): time in each kernel,
+     * the wavefront's four or the per-pixel kernel */
+    double raygen_s, intersect_s, shade_s, occlude_s, pixel_s;
 } render_stats;
 void renderer_get_stats(const renderer *r, render_stats *st);
 

@@ -1,5 +1,6 @@
 /* The renderer's test hooks (render_debug.h): the ray-generation, intersection and
- * shadow-ray kernels run alone on given rays, and the last build options. Only the test
+ * shadow-ray kernels run alone on given rays (the wavefront's kernels: a hook builds the
+ * wavefront program whatever the strategy), and the last build options. Only the test
  * suites call them, so only they link this file out of the library. */
 #include "render_debug.h"
 
@@ -12,7 +13,8 @@
 int renderer_generate_rays(renderer *r, cw_ray *rays, char *err, size_t errlen)
 {
     size_t n;
-    if (rpass_need_scene(r, err, errlen) || renderer_ensure_program(r, err, errlen))
+    if (rpass_need_scene(r, err, errlen) ||
+        renderer_ensure_program(r, RENDER_WAVEFRONT, err, errlen))
         return -1;
     n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
     if (rpass_ensure_image(r, err, errlen) ||
@@ -25,7 +27,8 @@ int renderer_generate_rays(renderer *r, cw_ray *rays, char *err, size_t errlen)
 int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, char *err,
                        size_t errlen)
 {
-    if (rpass_need_scene(r, err, errlen) || renderer_ensure_program(r, err, errlen))
+    if (rpass_need_scene(r, err, errlen) ||
+        renderer_ensure_program(r, RENDER_WAVEFRONT, err, errlen))
         return -1;
     if (n <= 0) {
         snprintf(err, errlen, "renderer_intersect: no rays");
@@ -51,7 +54,8 @@ int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocke
     float *px = NULL;
     int rc = -1;
 
-    if (rpass_need_scene(r, err, errlen) || renderer_ensure_program(r, err, errlen))
+    if (rpass_need_scene(r, err, errlen) ||
+        renderer_ensure_program(r, RENDER_WAVEFRONT, err, errlen))
         return -1;
     if (n <= 0) {
         snprintf(err, errlen, "renderer_occluded: no rays");

@@ -27,9 +27,12 @@ struct renderer {
     cl_context ctx;
     cl_command_queue queue;
     cl_ulong max_alloc; /* CL_DEVICE_MAX_MEM_ALLOC_SIZE */
+    int cpu;            /* CL_DEVICE_TYPE_CPU: RENDER_AUTO picks the per-pixel kernel */
     cl_program program;
     char options[1024]; /* build options of `program` */
-    cl_kernel k_raygen, k_intersect, k_shade, k_occlude;
+    int strategy;       /* of `program`: RENDER_WAVEFRONT (the four wavefront kernels) or
+                         * RENDER_PIXEL (k_pixel) */
+    cl_kernel k_raygen, k_intersect, k_shade, k_occlude, k_pixel;
     /* scene buffers: the world, and the lights and materials of the shading kernel */
     render_world world;
     cl_mem lights, materials;
@@ -47,8 +50,9 @@ struct renderer {
     void *progress_ctx;
 };
 
-/* Builds the program for the scene's features and the current settings, unless built
- * (render.c). Returns 0, or -1 with err. */
-int renderer_ensure_program(renderer *r, char *err, size_t errlen);
+/* Builds the program for the scene's features, the current settings and the given
+ * strategy (RENDER_WAVEFRONT or RENDER_PIXEL), unless built (render.c): renders ask for
+ * renderer_strategy(r), the test hooks for the wavefront. Returns 0, or -1 with err. */
+int renderer_ensure_program(renderer *r, int strategy, char *err, size_t errlen);
 
 #endif

@@ -1,6 +1,7 @@
 /* The device side of a render: work buffers grown on demand, kernel arguments and
- * launches, and the pass loop that traces one sample of a band of rows (ray generation,
- * then per depth one intersection, one shading and one shadow-ray launch). */
+ * launches, and the pass that traces one sample of a band of rows in either strategy: the
+ * wavefront's loop (ray generation, then per depth one intersection, one shading and one
+ * shadow-ray launch) or one launch of the per-pixel kernel. */
 #include "render_pass.h"
 
 #include <stdio.h>
@@ -24,9 +25,22 @@ enum {
     SHADE_N
 };
 enum { OCCLUDE_SHADOWS = CW_WORLD_NARGS, OCCLUDE_IMAGE, OCCLUDE_COUNTERS, OCCLUDE_N };
+enum {
+    PIXEL_LIGHTS = CW_WORLD_NARGS,
+    PIXEL_MATERIALS,
+    PIXEL_IMAGE,
+    PIXEL_COUNTERS,
+    PIXEL_ROW0,
+    PIXEL_NROWS,
+    PIXEL_SX,
+    PIXEL_SY
+};
 
 /* Memory for one band's ray queues, hits and shadow rays. */
 #define BAND_BYTES ((size_t)64 << 20)
+/* Pixels per launch of the per-pixel kernel: a band is traced in launches of about this
+ * many pixels, each followed by the read of the counters and a progress report. */
+#define PIXEL_LAUNCH_PIXELS 65536
 
 int rpass_fail(cl_int e, const char *call, const renderer *r, char *err, size_t errlen)
 {
@@ -184,12 +198,12 @@ static int set_world_args(renderer *r, cl_kernel k, const char *kname, char *err
     return 0;
 }
 
-/* The work-group size for kernel k: 64, or less where the device or the kernel allows
- * less (queried, never assumed). A fixed size also keeps PoCL from specialising (and
- * compiling) the kernel anew for every global size. */
+/* The work-group size for kernel k: CW_GROUP_SIZE (64), or less where the device or the
+ * kernel allows less (queried, never assumed). A fixed size also keeps PoCL from
+ * specialising (and compiling) the kernel anew for every global size. */
 static size_t group_size(const renderer *r, cl_kernel k)
 {
-    size_t kmax = 0, g = 64;
+    size_t kmax = 0, g = CW_GROUP_SIZE;
     if (clGetKernelWorkGroupInfo(k, r->device, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax,
                                  NULL) != CL_SUCCESS ||
         kmax == 0)
@@ -285,6 +299,38 @@ int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen)
            launch(r, kn, (size_t)n, k, err, errlen);
 }
 
+/* The per-pixel kernel over rows [row0, row0 + nrows), in 2-D like cw_raygen. */
+static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, char *err, size_t errlen)
+{
+    const char *k = "cw_pixel";
+    cl_kernel kn = r->k_pixel;
+    size_t global[2], local[2];
+    cl_int e, crow0 = row0, cnrows = nrows;
+    local[1] = 1;
+    local[0] = group_size(r, kn);
+    global[0] = ((size_t)r->host_frame.nx + local[0] - 1) / local[0] * local[0];
+    global[1] = (size_t)nrows;
+    if (set_world_args(r, kn, k, err, errlen) ||
+        set_mem(kn, PIXEL_LIGHTS, &r->lights, k, r, err, errlen) ||
+        set_mem(kn, PIXEL_MATERIALS, &r->materials, k, r, err, errlen) ||
+        set_mem(kn, PIXEL_IMAGE, &r->image, k, r, err, errlen) ||
+        set_mem(kn, PIXEL_COUNTERS, &r->counters, k, r, err, errlen) ||
+        set_arg(kn, PIXEL_ROW0, sizeof crow0, &crow0, k, r, err, errlen) ||
+        set_arg(kn, PIXEL_NROWS, sizeof cnrows, &cnrows, k, r, err, errlen) ||
+        set_arg(kn, PIXEL_SX, sizeof sx, &sx, k, r, err, errlen) ||
+        set_arg(kn, PIXEL_SY, sizeof sy, &sy, k, r, err, errlen))
+        return -1;
+    e = clEnqueueNDRangeKernel(r->queue, kn, 2, NULL, global, local, 0, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        char call[128];
+        snprintf(call, sizeof call,
+                 "clEnqueueNDRangeKernel(%s, %zux%zu work-items in groups of %zu)", k, global[0],
+                 global[1], local[0]);
+        return rpass_fail(e, call, r, err, errlen);
+    }
+    return 0;
+}
+
 /* ---- the pass loop ---------------------------------------------------------------- */
 
 /* The position of sample k (mod spp) inside its pixel: a ceil(sqrt(spp)) x rows grid of
@@ -323,10 +369,55 @@ static int stats_lap(renderer *r, double *t0, double *acc, char *err, size_t err
     return 0;
 }
 
-/* The next level's rays go to the other queue. The only wait per level is the read of
- * the queue counters. */
-int rpass_trace_band(renderer *r, int sample, int row0, int nrows, double done, double share,
-                     char *err, size_t errlen)
+/* The per-pixel strategy: the band in launches of about PIXEL_LAUNCH_PIXELS pixels, the
+ * counters read after each (the only wait). The band's deepest ray is the number of
+ * levels the wavefront runs for it: the bands are the wavefront's, so the passes are too. */
+static int trace_band_pixel(renderer *r, int sample, int row0, int nrows, double done, double share,
+                            char *err, size_t errlen)
+{
+    int rows = PIXEL_LAUNCH_PIXELS / r->host_frame.nx, depth = 1, y;
+    float sx, sy;
+    double tl = sys_now();
+
+    if (rows < 1)
+        rows = 1;
+    sample_position(r->settings.spp, sample, &sx, &sy);
+    if (rpass_ensure_image(r, err, errlen))
+        return -1;
+    for (y = row0; y < row0 + nrows; y += rows) {
+        cl_int counts[CW_NUM_COUNTERS];
+        int n = y + rows > row0 + nrows ? row0 + nrows - y : rows;
+        if (rpass_fill_zero(r, r->counters, CW_NUM_COUNTERS * sizeof(cl_int), "counters", err,
+                            errlen) ||
+            run_pixel(r, y, n, sx, sy, err, errlen) ||
+            rpass_read(r, r->counters, sizeof counts, counts, "counters", err, errlen) ||
+            stats_lap(r, &tl, &r->stats.pixel_s, err, errlen))
+            return -1;
+        if (counts[CW_COUNT_DEPTH] > depth)
+            depth = counts[CW_COUNT_DEPTH];
+        r->stats.eye_rays += (unsigned long long)r->host_frame.nx * (unsigned long long)n;
+        r->stats.shadow_rays += (unsigned long long)counts[CW_COUNT_SHADOWS];
+        r->stats.secondary_rays += (unsigned long long)counts[CW_COUNT_RAYS];
+        if (r->settings.stats) {
+            r->stats.eye_hits += (unsigned long long)counts[CW_COUNT_EYE_HITS];
+            r->stats.secondary_hits += (unsigned long long)counts[CW_COUNT_SECONDARY_HITS];
+            r->stats.shadow_blocked += (unsigned long long)counts[CW_COUNT_BLOCKED];
+        }
+        if (r->progress &&
+            r->progress(r->progress_ctx, done + share * (double)(y + n - row0) / nrows,
+                        total_rays(&r->stats)) != 0) {
+            snprintf(err, errlen, "render cancelled");
+            return -1;
+        }
+    }
+    r->stats.passes += depth;
+    return 0;
+}
+
+/* The wavefront: the next level's rays go to the other queue. The only wait per level is
+ * the read of the queue counters. */
+static int trace_band_wavefront(renderer *r, int sample, int row0, int nrows, double done,
+                                double share, char *err, size_t errlen)
 {
     cl_int n = (cl_int)((size_t)r->host_frame.nx * (size_t)nrows);
     int cur = 0, depth, branch = r->features.transmitters ? 2 : 1;
@@ -390,4 +481,12 @@ int rpass_trace_band(renderer *r, int sample, int row0, int nrows, double done, 
         }
     }
     return 0;
+}
+
+int rpass_trace_band(renderer *r, int sample, int row0, int nrows, double done, double share,
+                     char *err, size_t errlen)
+{
+    if (r->strategy == RENDER_PIXEL)
+        return trace_band_pixel(r, sample, row0, nrows, done, share, err, errlen);
+    return trace_band_wavefront(r, sample, row0, nrows, done, share, err, errlen);
 }

@@ -34,7 +34,9 @@ int rpass_write(renderer *r, cl_mem m, size_t size, const void *src, const char 
 int rpass_ensure_image(renderer *r, char *err, size_t errlen);
 int rpass_clear_accumulation(renderer *r, char *err, size_t errlen);
 
-/* Rows per band: a band's ray queues, hits and shadow rays stay within about 64 MB. */
+/* Rows per band: the wavefront's ray queues, hits and shadow rays stay within about 64 MB.
+ * The per-pixel strategy uses the same bands (so that its pass counts are the wavefront's)
+ * and launches each in parts of about 64k pixels. */
 int rpass_band_rows(const renderer *r);
 
 /* The kernel launches: eye rays for rows [row0, row0 + nrows) at sample position (sx, sy)
@@ -44,9 +46,10 @@ int rpass_raygen(renderer *r, int row0, int nrows, float sx, float sy, char *err
 int rpass_intersect(renderer *r, cl_mem *rays, cl_int n, char *err, size_t errlen);
 int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen);
 
-/* Traces sample number `sample` for rows [row0, row0 + nrows) into the accumulation image:
- * ray generation, then per depth level one intersect, one shade and one occlude launch.
- * Progress is reported after each level as done + share * (the band's part done). */
+/* Traces sample number `sample` for rows [row0, row0 + nrows) into the accumulation image,
+ * with the program's strategy: the wavefront (ray generation, then per depth level one
+ * intersect, one shade and one occlude launch) or per-pixel launches. Progress is
+ * reported after each level or launch as done + share * (the band's part done). */
 int rpass_trace_band(renderer *r, int sample, int row0, int nrows, double done, double share,
                      char *err, size_t errlen);
 

@@ -1,14 +1,55 @@
-/* Thin entry kernels: index, bounds check, one call into the domain headers.
- * Wavefront: raygen fills the ray queue; per level, intersect finds each queued ray's
- * closest hit, shade adds ambient/background to the pixel and appends shadow rays and
- * the next level's rays, and occlude adds each unblocked shadow ray's light. */
+/* Thin entry kernels: index, bounds check, one call into the domain headers. The program
+ * holds one execution strategy's kernels (CW_PIXEL, flags.h):
+ * - per pixel (CPUs): cw_pixel traces the whole ray tree of one pixel sample per
+ *   work-item, shadow rays in place (pixel.h);
+ * - wavefront (GPUs): raygen fills the ray queue; per level, intersect finds each queued
+ *   ray's closest hit, shade adds ambient/background to the pixel and appends shadow rays
+ *   and the next level's rays (wavefront.h), and occlude adds each unblocked shadow ray's
+ *   light. */
 #include "camera.h"
 #include "flags.h"
 #include "isect.h"
+#include "pixel.h"
 #include "shade.h"
 #include "traverse.h"
 #include "types.h"
+#include "wavefront.h"
 #include "world.h"
+
+#if CW_PIXEL
+
+/* 2-D launch over a band of rows, as cw_raygen, in groups of at most CW_GROUP_SIZE. Each
+ * work-item leaves its counts in its own slot of local memory, and the group's first adds
+ * their sum to the counters (CW_COUNT_DEPTH: the maximum): no atomic per pixel. */
+__kernel void cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights,
+                       __global const cw_material *materials, __global float *image,
+                       __global int *counters, int row0, int nrows, float sx, float sy)
+{
+    __local pix_counts counts[CW_GROUP_SIZE];
+    int x = (int)get_global_id(0);
+    int y = (int)get_global_id(1);
+    int lid = (int)get_local_id(0), i, k;
+    pix_counts c;
+    cw_world w;
+    pix_clear(&c);
+    if (x < f->nx && y < nrows) {
+        CW_MAKE_WORLD(w);
+        c = pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy);
+    }
+    counts[lid] = c;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid != 0)
+        return;
+    for (i = 1; i < (int)get_local_size(0); i++)
+        pix_sum(&c, counts[i]);
+    for (k = 0; k < CW_COUNT_DEPTH; k++)
+        if (pix_counted(k) && c.n[k] != 0)
+            atomic_add(&counters[k], c.n[k]);
+    if (c.n[CW_COUNT_DEPTH] > 1)
+        atomic_max(&counters[CW_COUNT_DEPTH], c.n[CW_COUNT_DEPTH]);
+}
+
+#else
 
 /* 2-D launch over a band of rows: x = column, y = row within the band (image row 0 at
  * the top). Ray k of the band is pixel (x, row0 + y); the pixel's sample count (.w of
@@ -37,8 +78,8 @@ __kernel void cw_intersect(CW_WORLD_ARGS, __global const cw_ray *rays, __global 
         return;
     ray = rays[gid];
     CW_MAKE_WORLD(w);
-    bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, CW_FAR, ray.skip, &hits[gid]);
-    hit = hits[gid];
+    bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, CW_FAR, ray.skip, &hit);
+    hits[gid] = hit;
 #if CW_STATS
     if (hit.kind != CW_PRIM_NONE)
         atomic_inc(&counters[ray.depth == 1 ? CW_COUNT_EYE_HITS : CW_COUNT_SECONDARY_HITS]);
@@ -59,7 +100,7 @@ __kernel void cw_shade(CW_WORLD_ARGS, __global const cw_light *lights,
         return;
     ray = rays[gid];
     CW_MAKE_WORLD(w);
-    shade_ray(&w, f, lights, materials, &ray, hits[gid], image, out, shadows, counters);
+    wave_shade(&w, f, lights, materials, &ray, hits[gid], image, out, shadows, counters);
 }
 
 /* One work-item per shading point: the first of its consecutive shadow rays (block > 0)
@@ -85,6 +126,8 @@ __kernel void cw_occlude(CW_WORLD_ARGS, __global const cw_shadow_ray *shadows,
         }
         sum += sr.color.xyz;
     }
-    shade_add_local(image, shadows[gid].pixel, sum);
+    wave_add_local(image, shadows[gid].pixel, sum);
     (void)counters;
 }
+
+#endif

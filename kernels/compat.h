@@ -1,10 +1,11 @@
 /* What differs between OpenCL C 1.2 and host C99, and nothing else: the address-space
- * and inline keywords (CW_GLOBAL, CW_INLINE), the vector types (cw_float4, vec3, v4), the
- * math functions (cw_sqrt ...), the atomics and the contraction pragma. The kernel
- * headers are written with these so that they compile both as OpenCL C (the kernels) and
- * as host C99 (host code and tests). OpenCL C appears elsewhere only in the OpenCL branch
- * of vecmath.h (vector operators and built-ins) and in the entry kernels of clwhitted.cl
- * (__kernel, __global, work-item functions), which the host never compiles. */
+ * and inline keywords (CW_GLOBAL, CW_INLINE, CW_FORCE_INLINE), the vector types
+ * (cw_float4, vec3, v4), the math functions (cw_sqrt ...), the atomics and the
+ * contraction pragma. The kernel headers are written with these so that they compile
+ * both as OpenCL C (the kernels) and as host C99 (host code and tests). OpenCL C appears
+ * elsewhere only in the OpenCL branch of vecmath.h (vector operators and built-ins) and
+ * in the entry kernels of clwhitted.cl (__kernel, __global, __local, work-item functions
+ * and barriers), which the host never compiles. */
 #ifndef CW_COMPAT_H
 #define CW_COMPAT_H
 
@@ -12,6 +13,8 @@
 
 #define CW_GLOBAL __global
 #define CW_INLINE static inline
+/* inlined even where the compiler would rather call (a hot function with several callers) */
+#define CW_FORCE_INLINE static inline __attribute__((always_inline))
 
 typedef float4 cw_float4;
 typedef float3 vec3;
@@ -58,6 +61,7 @@ CW_INLINE void cw_atomic_add(volatile __global float *p, float v)
 
 #define CW_GLOBAL
 #define CW_INLINE static inline
+#define CW_FORCE_INLINE static inline __attribute__((always_inline))
 
 typedef struct {
     float x, y, z, w;

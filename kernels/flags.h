@@ -32,11 +32,17 @@
 #ifndef CW_STATS
 #define CW_STATS 0
 #endif
+/* The execution strategy whose entry kernels the program holds: 1: the per-pixel kernel
+ * (cw_pixel, for CPUs); 0: the wavefront kernels (cw_raygen, cw_intersect, cw_shade,
+ * cw_occlude, for GPUs). */
+#ifndef CW_PIXEL
+#define CW_PIXEL 0
+#endif
 
 #if (CW_HAS_SPHERES | CW_HAS_TRIANGLES | CW_HAS_POLYGONS | CW_HAS_CONES | CW_HAS_MIRRORS |         \
-     CW_HAS_REFRACTION | CW_FAST | CW_STATS) &                                                     \
+     CW_HAS_REFRACTION | CW_FAST | CW_STATS | CW_PIXEL) &                                          \
     ~1
-#error "feature flags CW_HAS_*, CW_FAST and CW_STATS must be 0 or 1"
+#error "feature flags CW_HAS_*, CW_FAST, CW_STATS and CW_PIXEL must be 0 or 1"
 #endif
 #if !CW_FAST && defined(__FAST_RELAXED_MATH__)
 #error "the robust path (CW_FAST=0) must not be built with -cl-fast-relaxed-math"

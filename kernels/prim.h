@@ -16,9 +16,10 @@
 #include "world.h"
 
 /* Tests the ray against one referenced primitive (a CW_REF); on a hit closer than *tmax,
- * records it in *hit and lowers *tmax. */
-CW_INLINE void prim_intersect(const cw_world *w, int ref, const cw_rayinfo *ri, float tmin,
-                              float *tmax, cw_hit *hit)
+ * records it in *hit and lowers *tmax. Always inlined: the per-pixel kernel calls it from
+ * both traversals, where a call would keep the hit in memory. */
+CW_FORCE_INLINE void prim_intersect(const cw_world *w, int ref, const cw_rayinfo *ri, float tmin,
+                                    float *tmax, cw_hit *hit)
 {
     int kind = CW_REF_KIND(ref), index = CW_REF_INDEX(ref);
     float t = 0.0f, u = 0.0f, v = 0.0f;

@@ -1,7 +1,9 @@
-/* shade_: Blinn-Phong shading, shadow rays, ideal mirror reflection and Snell refraction
- * (Shirley & Marschner 4.5-4.8, 13.1), one ray-tree level at a time: shading a ray adds
- * its ambient term to the pixel and appends a shadow ray per light and the next level's
- * reflection and refraction rays to queues. No recursion. */
+/* shade_: the shading formulas both execution strategies share (Shirley & Marschner
+ * 4.5-4.8, 13.1): the shading point of a hit, its ambient term and the background of a
+ * miss, the shadow ray toward a light and the light's Blinn-Phong term, and the ideal
+ * mirror and Snell refraction rays it spawns, with their origins moved off the surface.
+ * The wavefront (wavefront.h) queues the shadow and secondary rays for later kernels; the
+ * per-pixel kernel (pixel.h) traces them in place. No recursion. */
 #ifndef CW_SHADE_H
 #define CW_SHADE_H
 
@@ -50,157 +52,135 @@ CW_INLINE float shade_pow(float x, float p)
     return cw_exp2(p * cw_log2(x));
 }
 
-/* Adds c to pixel's rgb when several work-items may add to the same pixel at once. */
-CW_INLINE void shade_add(CW_GLOBAL float *image, int pixel, vec3 c)
-{
-    if (c.x != 0.0f)
-        cw_atomic_add(&image[4 * pixel + 0], c.x);
-    if (c.y != 0.0f)
-        cw_atomic_add(&image[4 * pixel + 1], c.y);
-    if (c.z != 0.0f)
-        cw_atomic_add(&image[4 * pixel + 2], c.z);
-}
-
-/* Adds c to pixel's rgb from the shade kernel. Without refraction a level holds at most
- * one ray per pixel, so a plain add is safe there; with it, a ray's refracted and
- * reflected children share the pixel. */
-CW_INLINE void shade_add_local(CW_GLOBAL float *image, int pixel, vec3 c)
-{
-#if CW_HAS_REFRACTION
-    shade_add(image, pixel, c);
-#else
-    image[4 * pixel + 0] += c.x;
-    image[4 * pixel + 1] += c.y;
-    image[4 * pixel + 2] += c.z;
-#endif
-}
-
 CW_INLINE int shade_nonzero(vec3 c)
 {
     return c.x > 0.0f || c.y > 0.0f || c.z > 0.0f;
 }
 
-CW_INLINE void shade_put_ray(CW_GLOBAL cw_ray *out, int slot, vec3 o, vec3 d, vec3 weight,
-                             const cw_ray *parent, int skip)
+/* A hit as shading needs it: the surface, the shading normal turned to face the ray
+ * (shading is two-sided), the ray's direction and weight (the product of the mirror and
+ * transmission colours on its path), and the surface's material. */
+typedef struct {
+    cw_surface s;
+    vec3 n, d, weight;
+    CW_GLOBAL const cw_material *m;
+} shade_point;
+
+/* The shading point of the ray o + t d (weight: its weight) at hit (not a miss). */
+CW_INLINE shade_point shade_at(const cw_world *w, CW_GLOBAL const cw_material *materials, vec3 o,
+                               vec3 d, vec3 weight, cw_hit hit)
 {
-    cw_ray r;
-    r.origin = v4_from3(o, 0.0f);
-    r.dir = v4_from3(d, 0.0f);
-    r.weight = v4_from3(weight, 0.0f);
-    r.pixel = parent->pixel;
-    r.depth = parent->depth + 1;
-    r.skip = skip;
-    r.pad0 = 0;
-    out[slot] = r;
+    shade_point sp;
+    sp.s = prim_surface(w, hit, o, d);
+    sp.n = v3_dot(sp.s.ns, d) > 0.0f ? v3_scale(sp.s.ns, -1.0f) : sp.s.ns;
+    sp.d = d;
+    sp.weight = weight;
+    sp.m = &materials[sp.s.material];
+    return sp;
 }
 
-/* Shades *ray at hit (see the file comment). A miss adds the background. Each ray
- * reserves its queue slots with one atomic add per queue (not one per shadow ray). */
-CW_INLINE void shade_ray(const cw_world *w, CW_GLOBAL const cw_frame *f,
-                         CW_GLOBAL const cw_light *lights, CW_GLOBAL const cw_material *materials,
-                         const cw_ray *ray, cw_hit hit, CW_GLOBAL float *image,
-                         CW_GLOBAL cw_ray *out, CW_GLOBAL cw_shadow_ray *shadows,
-                         CW_GLOBAL int *counters)
+/* What a ray of this weight that hits nothing adds to its pixel. */
+CW_INLINE vec3 shade_background(CW_GLOBAL const cw_frame *f, vec3 weight)
 {
-    vec3 weight = v3_from4(ray->weight);
-    vec3 d = v3_from4(ray->dir);
-    vec3 n, ka, kd, ks, km, kt;
-    float phong;
-    int k, count, slot, first;
-    cw_surface s;
-    CW_GLOBAL const cw_material *m;
+    return v3_mul(weight, v3_from4(f->background));
+}
 
-    if (hit.kind == CW_PRIM_NONE) {
-        shade_add_local(image, ray->pixel, v3_mul(weight, v3_from4(f->background)));
-        return;
+/* The ambient term of a shading point: weight ka Ia. */
+CW_INLINE vec3 shade_ambient(CW_GLOBAL const cw_frame *f, const shade_point *sp)
+{
+    return v3_mul(sp->weight, v3_mul(v3_from4(sp->m->ka), v3_from4(f->ambient)));
+}
+
+/* Whether the shading point faces the light at lp (n.l > 0): only then does the light
+ * get a shadow ray and a term. */
+CW_INLINE int shade_faces(const shade_point *sp, vec3 lp)
+{
+    return v3_dot(sp->n, v3_sub(lp, sp->s.p)) > 0.0f;
+}
+
+/* The shadow ray toward the light at lp: its unit direction *l and origin *o (moved off
+ * the surface); returns the distance from *o to the light, the ray's tmax. The ray never
+ * hits the primitive it leaves, sp->s.flat - 1 (its skip). */
+CW_INLINE float shade_shadow_ray(const shade_point *sp, vec3 lp, vec3 *o, vec3 *l)
+{
+    vec3 to_light = v3_sub(lp, sp->s.p);
+    float dist = v3_len(to_light);
+    *l = v3_scale(to_light, 1.0f / dist);
+    *o = shade_spawn(&sp->s, *l);
+    return v3_len(v3_sub(lp, *o));
+}
+
+/* The Blinn-Phong term of a light of this intensity in direction l (unit, facing), to be
+ * added when nothing blocks its shadow ray: (kd n.l + ks (n.h)^p) weight intensity. With
+ * ks = 0 the power is not computed: ks (n.h)^p would be +0, which leaves the sum as it is. */
+CW_INLINE vec3 shade_light(const shade_point *sp, vec3 l, vec3 intensity)
+{
+    vec3 kd = v3_from4(sp->m->kd), ks = v3_from4(sp->m->ks);
+    float ndl = cw_fmax(v3_dot(sp->n, l), 0.0f);
+    vec3 c = v3_scale(kd, ndl);
+    if (ks.x != 0.0f || ks.y != 0.0f || ks.z != 0.0f) {
+        vec3 h = v3_norm(v3_sub(l, sp->d));
+        float ndh = cw_fmax(0.0f, v3_dot(sp->n, h));
+        c = v3_add(c, v3_scale(ks, shade_pow(ndh, sp->m->ka.w)));
     }
-    s = prim_surface(w, hit, v3_from4(ray->origin), d);
-    /* two-sided: shade the side facing the ray */
-    n = v3_dot(s.ns, d) > 0.0f ? v3_scale(s.ns, -1.0f) : s.ns;
-    m = &materials[s.material];
-    ka = v3_from4(m->ka);
-    kd = v3_from4(m->kd);
-    ks = v3_from4(m->ks);
-    km = v3_from4(m->km);
-    kt = v3_from4(m->kt);
-    phong = m->ka.w;
+    return v3_mul(c, v3_mul(sp->weight, intensity));
+}
 
-    shade_add_local(image, ray->pixel, v3_mul(weight, v3_mul(ka, v3_from4(f->ambient))));
-    /* a shadow ray for each light the surface faces (n.l > 0): count, reserve, write */
-    count = 0;
-    for (k = 0; k < f->num_lights; k++)
-        if (v3_dot(n, v3_sub(v3_from4(lights[k].position), s.p)) > 0.0f)
-            count++;
-    slot = count > 0 ? cw_atomic_add_int(&counters[CW_COUNT_SHADOWS], count) : 0;
-    first = 1;
-    for (k = 0; k < f->num_lights && count > 0; k++) {
-        vec3 lp = v3_from4(lights[k].position);
-        vec3 to_light = v3_sub(lp, s.p);
-        float dist = v3_len(to_light);
-        vec3 l, h, c, o;
-        float ndl, ndh;
-        cw_shadow_ray sr;
+/* The secondary rays of a shading point (below the maximum depth): a refraction ray and a
+ * mirror ray, each when there is one. Each leaves from its origin (moved off the surface)
+ * in its unit direction with its weight, and never hits the primitive it leaves (skip). */
+typedef struct {
+    int refract, reflect;    /* 0 or 1 each */
+    int skip;                /* as in cw_ray: the surface's flat */
+    vec3 t_o, t_d, t_weight; /* the refraction ray */
+    vec3 r_o, r_d, r_weight; /* the mirror ray */
+} shade_next;
 
-        if (!(v3_dot(n, to_light) > 0.0f)) /* facing away: no contribution, no shadow ray */
-            continue;
-        l = v3_scale(to_light, 1.0f / dist);
-        ndl = cw_fmax(v3_dot(n, l), 0.0f);
-        h = v3_norm(v3_sub(l, d));
-        ndh = cw_fmax(0.0f, v3_dot(n, h));
-        c = v3_mul(v3_add(v3_scale(kd, ndl), v3_scale(ks, shade_pow(ndh, phong))),
-                   v3_mul(weight, v3_from4(lights[k].intensity)));
-        o = shade_spawn(&s, l);
-        sr.origin = v4_from3(o, v3_len(v3_sub(lp, o)));
-        sr.dir = v4_from3(l, 0.0f);
-        sr.color = v4_from3(c, 0.0f);
-        sr.pixel = ray->pixel;
-        sr.skip = s.flat;
-        sr.block = first ? count : 0;
-        sr.pad0 = 0;
-        first = 0;
-        shadows[slot++] = sr;
-    }
-
-    if (ray->depth >= f->max_depth)
-        return;
+/* spd_rays: SPD counting, where a transmitter also spawns a mirror ray when km = 0. */
+CW_INLINE shade_next shade_secondary(const shade_point *sp, int spd_rays)
+{
+    shade_next nx;
+    nx.refract = nx.reflect = 0;
+    nx.skip = sp->s.flat;
 #if CW_HAS_MIRRORS || CW_HAS_REFRACTION
     {
-        vec3 refl_weight = km, td = v3(0.0f, 0.0f, 0.0f);
-        int reflect = shade_nonzero(km), refract = 0;
+        vec3 km = v3_from4(sp->m->km), refl_weight = km;
+#if CW_HAS_REFRACTION
+        vec3 kt = v3_from4(sp->m->kt);
+#endif
+        nx.reflect = shade_nonzero(km);
 #if CW_HAS_REFRACTION
         if (shade_nonzero(kt)) {
             /* inside or outside from the geometric normal's side; shading stays two-sided */
-            int entering = v3_dot(d, s.ng) < 0.0f;
-            float ior = m->kt.w > 0.0f ? m->kt.w : 1.0f;
+            int entering = v3_dot(sp->d, sp->s.ng) < 0.0f;
+            float ior = sp->m->kt.w > 0.0f ? sp->m->kt.w : 1.0f;
             float eta = entering ? 1.0f / ior : ior;
-            float cosi = -v3_dot(d, n);
+            float cosi = -v3_dot(sp->d, sp->n);
             float k2 = 1.0f - eta * eta * (1.0f - cosi * cosi);
-            if (f->spd_rays)
-                reflect = 1;
+            if (spd_rays)
+                nx.reflect = 1;
             if (k2 < 0.0f) { /* total internal reflection: the transmitted share reflects */
                 refl_weight = v3_add(refl_weight, kt);
-                reflect = 1;
+                nx.reflect = 1;
             } else {
-                td = v3_norm(v3_add(v3_scale(d, eta), v3_scale(n, eta * cosi - cw_sqrt(k2))));
-                refract = 1;
+                nx.t_d = v3_norm(
+                    v3_add(v3_scale(sp->d, eta), v3_scale(sp->n, eta * cosi - cw_sqrt(k2))));
+                nx.t_o = shade_spawn(&sp->s, nx.t_d);
+                nx.t_weight = v3_mul(sp->weight, kt);
+                nx.refract = 1;
             }
         }
 #endif
-        if (reflect + refract > 0) {
-            slot = cw_atomic_add_int(&counters[CW_COUNT_RAYS], reflect + refract);
-            if (refract)
-                shade_put_ray(out, slot++, shade_spawn(&s, td), td, v3_mul(weight, kt), ray,
-                              s.flat);
-            if (reflect) {
-                vec3 r = v3_norm(v3_sub(d, v3_scale(n, 2.0f * v3_dot(d, n))));
-                shade_put_ray(out, slot, shade_spawn(&s, r), r, v3_mul(weight, refl_weight), ray,
-                              s.flat);
-            }
+        if (nx.reflect) {
+            nx.r_d = v3_norm(v3_sub(sp->d, v3_scale(sp->n, 2.0f * v3_dot(sp->d, sp->n))));
+            nx.r_o = shade_spawn(&sp->s, nx.r_d);
+            nx.r_weight = v3_mul(sp->weight, refl_weight);
         }
     }
 #endif
-    (void)km;
-    (void)kt;
+    (void)sp;
+    (void)spd_rays;
+    return nx;
 }
 
 #endif

@@ -37,9 +37,10 @@ CW_INLINE void bvh_box4(CW_GLOBAL const cw_bvh4_node *nd, const cw_rayinfo *ri, 
 /* Closest hit in (tmin, tmax), never the primitive skip - 1 (skip = 0: none), written to
  * *out. Leaf children are tested as they are found; interior children are visited nearest
  * first, the others stacked with their entry distance and skipped when a closer hit has
- * been found by the time they come off the stack. */
+ * been found by the time they come off the stack. (*out is private memory: the hit is
+ * written through a pointer rather than returned, for Oclgrind; see docs/portability.md.) */
 CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax, int skip,
-                           CW_GLOBAL cw_hit *out)
+                           cw_hit *out)
 {
     cw_hit hit;
     cw_rayinfo ri = isect_rayinfo(o, d);

@@ -63,8 +63,24 @@ typedef struct {
     int band_count;
 } cw_polygon;
 
+/* Work-items per group, at most (the host asks for fewer where a kernel or device allows
+ * fewer): the per-pixel kernel keeps a slot of local memory for each. */
+#define CW_GROUP_SIZE 64
+
 /* Entries of the kernels' BVH traversal stack (the host checks its tree needs no more). */
 #define CW_BVH_STACK 96
+
+/* The per-pixel kernel's pending rays (pixel.h), with refraction: a queue of CW_PIX_QUEUE
+ * rays for the breadth-first walk of a pixel's ray tree (every level up to depth 6 fits),
+ * and for a subtree that does not fit, a stack of CW_PIX_STACK for a depth-first walk,
+ * which never holds more than max_depth rays (the host checks that CW_MAX_DEPTH fits). */
+#ifndef CW_PIX_QUEUE /* (a test builds with a smaller queue, to walk subtrees depth first) */
+#define CW_PIX_QUEUE 32
+#endif
+#if CW_PIX_QUEUE < 1
+#error "CW_PIX_QUEUE must be at least 1"
+#endif
+#define CW_PIX_STACK 64
 
 /* A node of the 4-wide BVH the kernels traverse, collapsed from the host's binary one
  * (host/bvh.h): the boxes of up to four children side by side, for one 4-wide box test. */
@@ -136,6 +152,7 @@ typedef struct {
 #define CW_COUNT_EYE_HITS 2
 #define CW_COUNT_SECONDARY_HITS 3
 #define CW_COUNT_BLOCKED 4
+#define CW_COUNT_DEPTH 5 /* per-pixel kernel: the deepest ray traced (the wavefront's levels) */
 #define CW_NUM_COUNTERS 8
 
 typedef struct {
