@@ -41,6 +41,12 @@
 #define CW_BVH_THREADS 0
 #define CW_BVH_MAX_THREADS 16
 
+/* Rendering in bands of rows: the wavefront's ray queues, hits and shadow rays of a band
+ * stay within CW_BAND_BYTES; the per-pixel kernel traces a band in launches of about
+ * CW_PIXEL_LAUNCH_PIXELS pixels, each followed by the counters' read and a progress report. */
+#define CW_BAND_BYTES ((size_t)64 << 20)
+#define CW_PIXEL_LAUNCH_PIXELS 65536
+
 /* The preview's default samples per pixel before it stops refining. */
 #define CW_PREVIEW_DEFAULT_SPP 16
 

@@ -155,8 +155,11 @@ static void report(const cli_options *o, const scene *s, const renderer *r, cons
                "(%d passes)\n",
                t->loaded - t->start, st->build_s, st->compile_s, st->upload_s, st->trace_s,
                st->passes);
-        printf("kernels: raygen %.3f s, intersect %.3f s, shade %.3f s, occlude %.3f s\n",
-               st->raygen_s, st->intersect_s, st->shade_s, st->occlude_s);
+        if (renderer_strategy(r) == RENDER_PIXEL)
+            printf("kernels: pixel %.3f s\n", st->pixel_s);
+        else
+            printf("kernels: raygen %.3f s, intersect %.3f s, shade %.3f s, occlude %.3f s\n",
+                   st->raygen_s, st->intersect_s, st->shade_s, st->occlude_s);
         printf("fixed: opencl %.3f s (beside the parse), write %.3f s\n", t->opencl,
                t->written - t->rendered);
     }

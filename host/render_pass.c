@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "cl_device.h"
+#include "config.h"
 #include "sys.h"
 
 /* Kernel argument indices (kernels/clwhitted.cl). The kernels that take the world have
@@ -35,12 +36,6 @@ enum {
     PIXEL_SX,
     PIXEL_SY
 };
-
-/* Memory for one band's ray queues, hits and shadow rays. */
-#define BAND_BYTES ((size_t)64 << 20)
-/* Pixels per launch of the per-pixel kernel: a band is traced in launches of about this
- * many pixels, each followed by the read of the counters and a progress report. */
-#define PIXEL_LAUNCH_PIXELS 65536
 
 int rpass_fail(cl_int e, const char *call, const renderer *r, char *err, size_t errlen)
 {
@@ -155,7 +150,7 @@ int rpass_band_rows(const renderer *r)
 {
     size_t per_ray = 2 * sizeof(cw_ray) + sizeof(cw_hit) +
                      (size_t)(r->host_frame.num_lights + 1) * sizeof(cw_shadow_ray);
-    size_t rays = BAND_BYTES / per_ray;
+    size_t rays = CW_BAND_BYTES / per_ray;
     size_t rows = rays / (size_t)r->host_frame.nx;
     if (rows < 1)
         rows = 1;
@@ -369,13 +364,13 @@ static int stats_lap(renderer *r, double *t0, double *acc, char *err, size_t err
     return 0;
 }
 
-/* The per-pixel strategy: the band in launches of about PIXEL_LAUNCH_PIXELS pixels, the
+/* The per-pixel strategy: the band in launches of about CW_PIXEL_LAUNCH_PIXELS pixels, the
  * counters read after each (the only wait). The band's deepest ray is the number of
  * levels the wavefront runs for it: the bands are the wavefront's, so the passes are too. */
 static int trace_band_pixel(renderer *r, int sample, int row0, int nrows, double done, double share,
                             char *err, size_t errlen)
 {
-    int rows = PIXEL_LAUNCH_PIXELS / r->host_frame.nx, depth = 1, y;
+    int rows = CW_PIXEL_LAUNCH_PIXELS / r->host_frame.nx, depth = 1, y;
     float sx, sy;
     double tl = sys_now();
 

@@ -898,7 +898,8 @@ static void test_watertight_mesh(void **state)
  * sphere's whole disc, grazing rays included; half of the flat pairs' points within 1e-3 of
  * their shared edge or on it); cone hits from inside are skipped (legitimate re-hits there).
  * Spawning: prim_surface and shade_spawn on the host, skip = the surface's s.flat, exactly
- * as shade_ray does; the fast path as its kernel does (o + t d + 1e-4 n, no skip). */
+ * as the shading does (shade_secondary); the fast path as its kernel does (o + t d + 1e-4 n, no
+ * skip). */
 #define SH_KINDS 4
 
 typedef struct {
@@ -1113,7 +1114,7 @@ static void sh_run(const host_world *hw, const cw_ray *eye, const cw_hit *eh, si
                 nsh++;
             }
         }
-        /* refraction (ior 1.5), as shade_ray computes it: spheres and the flat pairs */
+        /* refraction (ior 1.5), as shade_secondary computes it: spheres and the flat pairs */
         if (g != 3) {
             int entering = v3_dot(d, s.ng) < 0.0f;
             float eta = entering ? 1.0f / 1.5f : 1.5f, cosi = -v3_dot(d, nf);
