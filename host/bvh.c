@@ -14,11 +14,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "box.h"
 #include "bvh_sah.h"
 #include "config.h"
+#include "sys.h"
 
 #define PAR_MIN_PRIMS (1 << 15) /* fewer primitives: one thread builds everything */
 #define PAR_SUBTREES 8          /* subtrees per thread the top of the tree is cut into */
@@ -165,10 +165,8 @@ out:
  * CW_BVH_MAX_THREADS. */
 static int thread_count(int threads)
 {
-    if (threads <= 0) {
-        long cores = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = cores > 0 ? (int)(cores < CW_BVH_MAX_THREADS ? cores : CW_BVH_MAX_THREADS) : 1;
-    }
+    if (threads <= 0)
+        threads = sys_cpu_count();
     return threads < CW_BVH_MAX_THREADS ? threads : CW_BVH_MAX_THREADS;
 }
 

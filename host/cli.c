@@ -196,13 +196,8 @@ static int parse_option(int c, const char *arg, cli_options *o)
         o->settings.spd = 1;
         return 0;
     case OPT_KERNEL:
-        if (strcmp(arg, "auto") == 0)
-            o->settings.strategy = RENDER_AUTO;
-        else if (strcmp(arg, "pixel") == 0)
-            o->settings.strategy = RENDER_PIXEL;
-        else if (strcmp(arg, "wavefront") == 0)
-            o->settings.strategy = RENDER_WAVEFRONT;
-        else {
+        o->settings.strategy = render_strategy_parse(arg);
+        if (o->settings.strategy < 0) {
             fprintf(
                 stderr,
                 "clwhitted: --kernel expects 'auto', 'pixel' or 'wavefront', got '%s'\n" CLI_HINT,

@@ -11,7 +11,9 @@
 #include <string.h>
 #include <time.h>
 
+#include "config.h"
 #include "image_internal.h"
+#include "sys.h"
 
 /* ------------------------------------------------------------------------------------ */
 /* The image model                                                                      */
@@ -273,6 +275,12 @@ int image_check_writable(const image *img, const char *path, char *err, size_t e
         return -1;
     }
     return 0;
+}
+
+int image_write_threads(void)
+{
+    int threads = sys_cpu_count();
+    return threads < CW_MAX_WRITE_THREADS ? threads : CW_MAX_WRITE_THREADS;
 }
 
 /* Local time as "YYYY:MM:DD hh:mm:ss" (the EXR capDate form) or ISO 8601 UTC, and UTC

@@ -275,9 +275,8 @@ static int exr_chunk_emit(void *ctx, int j)
 static exr_result_t exr_write_chunks(exr_chunks *x, int32_t chunks, const char **what,
                                      const char **bad_channel)
 {
-    int threads = sys_cpu_count(), i;
+    int threads = image_write_threads(), i;
     exr_result_t rv = EXR_ERR_SUCCESS;
-    threads = threads < CW_MAX_WRITE_THREADS ? threads : CW_MAX_WRITE_THREADS;
     x->window = 2 * threads;
     x->slot = calloc((size_t)x->window, sizeof *x->slot);
     *bad_channel = NULL;

@@ -63,6 +63,10 @@ void image_srgb8_encode(const image_srgb8_table *t, const float *linear, size_t 
 void image_local_date(time_t t, char *buf, size_t n, float *utc_offset);
 void image_iso8601_utc(time_t t, char *buf, size_t n);
 
+/* The threads an image writer compresses on: one per core it may use, at most
+ * CW_MAX_WRITE_THREADS. */
+int image_write_threads(void);
+
 /* The writers behind image_write_ex (o not NULL), in image_exr.c and image_png.c. */
 int image_exr_write(const image *img, const char *path, const image_write_opts *o, char *err,
                     size_t errlen);

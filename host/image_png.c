@@ -311,8 +311,7 @@ static int png_write_pixels(const image *img, const image_write_opts *o, FILE *f
     rows = CW_PNG_PIECE_BYTES / p.row_bytes;
     p.rows = rows < 1 ? 1 : rows > (size_t)img->height ? img->height : (int)rows;
     p.pieces = (img->height - 1) / p.rows + 1;
-    threads = sys_cpu_count();
-    threads = threads < CW_MAX_WRITE_THREADS ? threads : CW_MAX_WRITE_THREADS;
+    threads = image_write_threads();
     p.window = 2 * threads;
     if (!(p.slot = calloc((size_t)p.window, sizeof *p.slot))) {
         image_set_err(err, errlen, "%s: out of memory", path);

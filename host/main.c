@@ -56,14 +56,20 @@ typedef struct {
     int threaded;
 } scene_job;
 
+/* Reads the scene file and finishes the scene at the command line's size and depth.
+ * Returns 0, or -1 with err. */
+static int load_scene(const cli_options *o, scene *s, char *err, size_t errlen)
+{
+    if (scene_load(o->scene, s, err, errlen) != 0 ||
+        scene_finish(s, o->width, o->height, o->depth, err, errlen) != 0)
+        return -1;
+    return 0;
+}
+
 static void *scene_job_main(void *arg)
 {
     scene_job *j = arg;
-    const cli_options *o = j->o;
-    j->rc = scene_load(o->scene, j->s, j->err, sizeof j->err) != 0 ||
-                    scene_finish(j->s, o->width, o->height, o->depth, j->err, sizeof j->err) != 0
-                ? -1
-                : 0;
+    j->rc = load_scene(j->o, j->s, j->err, sizeof j->err);
     j->done_at = sys_now();
     return NULL;
 }
@@ -276,8 +282,7 @@ static int run_preview(const cli_options *o, progress_bar *bar)
 
     scene_init(&s);
     progress_status(bar, "loading the scene ...");
-    if (scene_load(o->scene, &s, err, sizeof err) != 0 ||
-        scene_finish(&s, o->width, o->height, o->depth, err, sizeof err) != 0) {
+    if (load_scene(o, &s, err, sizeof err) != 0) {
         fail_msg(bar, err);
         rc = 1;
     } else {

@@ -523,9 +523,21 @@ int renderer_strategy(const renderer *r)
     return r->cpu ? RENDER_PIXEL : RENDER_WAVEFRONT;
 }
 
+/* The strategies' names, by RENDER_AUTO, RENDER_WAVEFRONT, RENDER_PIXEL. */
+static const char *const strategy_names[] = {"auto", "wavefront", "pixel"};
+
 const char *render_strategy_name(int strategy)
 {
-    return strategy == RENDER_PIXEL ? "pixel" : strategy == RENDER_WAVEFRONT ? "wavefront" : "auto";
+    return strategy >= 0 && strategy < 3 ? strategy_names[strategy] : "auto";
+}
+
+int render_strategy_parse(const char *name)
+{
+    int k;
+    for (k = 0; k < 3; k++)
+        if (strcmp(name, strategy_names[k]) == 0)
+            return k;
+    return -1;
 }
 
 void renderer_get_stats(const renderer *r, render_stats *st)

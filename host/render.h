@@ -50,6 +50,8 @@ int renderer_set_settings(renderer *r, const render_settings *st, char *err, siz
  * RENDER_PIXEL (never RENDER_AUTO), and its name ("wavefront", "pixel"). */
 int renderer_strategy(const renderer *r);
 const char *render_strategy_name(int strategy);
+/* "auto", "wavefront", "pixel" -> RENDER_*, or -1. */
+int render_strategy_parse(const char *name);
 
 /* Ray counts (when settings.stats) and times of the last renderer_set_scene and
  * renderer_render, in seconds. */

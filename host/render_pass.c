@@ -348,6 +348,27 @@ static unsigned long long total_rays(const render_stats *st)
     return st->eye_rays + st->shadow_rays + st->secondary_rays;
 }
 
+/* Adds a launch's --stats counts (the hits and the blocked shadow rays) to the totals. */
+static void add_stat_counts(renderer *r, const cl_int *counts)
+{
+    if (!r->settings.stats)
+        return;
+    r->stats.eye_hits += (unsigned long long)counts[CW_COUNT_EYE_HITS];
+    r->stats.secondary_hits += (unsigned long long)counts[CW_COUNT_SECONDARY_HITS];
+    r->stats.shadow_blocked += (unsigned long long)counts[CW_COUNT_BLOCKED];
+}
+
+/* Reports the fraction done to the progress callback. Returns 0, or -1 with "render
+ * cancelled" when the callback asks to stop. */
+static int report_progress(renderer *r, double fraction, char *err, size_t errlen)
+{
+    if (r->progress && r->progress(r->progress_ctx, fraction, total_rays(&r->stats)) != 0) {
+        snprintf(err, errlen, "render cancelled");
+        return -1;
+    }
+    return 0;
+}
+
 /* With statistics on, waits for the queue and adds the time since *t0 to *acc. */
 static int stats_lap(renderer *r, double *t0, double *acc, char *err, size_t errlen)
 {
@@ -393,17 +414,9 @@ static int trace_band_pixel(renderer *r, int sample, int row0, int nrows, double
         r->stats.eye_rays += (unsigned long long)r->host_frame.nx * (unsigned long long)n;
         r->stats.shadow_rays += (unsigned long long)counts[CW_COUNT_SHADOWS];
         r->stats.secondary_rays += (unsigned long long)counts[CW_COUNT_RAYS];
-        if (r->settings.stats) {
-            r->stats.eye_hits += (unsigned long long)counts[CW_COUNT_EYE_HITS];
-            r->stats.secondary_hits += (unsigned long long)counts[CW_COUNT_SECONDARY_HITS];
-            r->stats.shadow_blocked += (unsigned long long)counts[CW_COUNT_BLOCKED];
-        }
-        if (r->progress &&
-            r->progress(r->progress_ctx, done + share * (double)(y + n - row0) / nrows,
-                        total_rays(&r->stats)) != 0) {
-            snprintf(err, errlen, "render cancelled");
+        add_stat_counts(r, counts);
+        if (report_progress(r, done + share * (double)(y + n - row0) / nrows, err, errlen))
             return -1;
-        }
     }
     r->stats.passes += depth;
     return 0;
@@ -454,26 +467,19 @@ static int trace_band_wavefront(renderer *r, int sample, int row0, int nrows, do
         if (r->settings.stats) {
             /* the occlude kernel's count is read with the next level's counters; wait
              * for it here so that each level's figures are complete */
-            cl_int blocked = 0;
             cl_int e = clFinish(r->queue);
             if (e != CL_SUCCESS)
                 return rpass_fail(e, "clFinish", r, err, errlen);
             if (rpass_read(r, r->counters, sizeof counts, counts, "counters", err, errlen))
                 return -1;
-            blocked = counts[CW_COUNT_BLOCKED];
-            r->stats.eye_hits += (unsigned long long)counts[CW_COUNT_EYE_HITS];
-            r->stats.secondary_hits += (unsigned long long)counts[CW_COUNT_SECONDARY_HITS];
-            r->stats.shadow_blocked += (unsigned long long)blocked;
+            add_stat_counts(r, counts);
         }
         n = counts[CW_COUNT_RAYS];
         cur = nxt;
-        if (r->progress &&
-            r->progress(r->progress_ctx,
-                        done + share * (n == 0 ? 1.0 : (double)depth / r->host_frame.max_depth),
-                        total_rays(&r->stats)) != 0) {
-            snprintf(err, errlen, "render cancelled");
+        if (report_progress(r,
+                            done + share * (n == 0 ? 1.0 : (double)depth / r->host_frame.max_depth),
+                            err, errlen))
             return -1;
-        }
     }
     return 0;
 }
