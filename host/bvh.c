@@ -1,5 +1,5 @@
 /* The bounding volume hierarchy (see bvh.h): the build on one thread or several, and the
- * collapse into the 4-wide tree. The binned SAH build itself is in bvh_sah.c.
+ * collapse into the wide tree. The binned SAH build itself is in bvh_sah.c.
  *
  * On several threads (bvh_build_threads) the tree is the same, bit for bit: the top of the
  * tree is built first (its large nodes binned on all threads); its nodes of at most
@@ -9,6 +9,7 @@
  * the one-thread build puts it. */
 #include "bvh.h"
 
+#include <float.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -266,44 +267,31 @@ double bvh_sah_cost(const bvh *b)
     return sum;
 }
 
-/* ---- the 4-wide tree ------------------------------------------------------------------ */
+/* ---- the wide tree ------------------------------------------------------------------- */
 
-static void f4_set(cw_float4 *v, int i, float x)
+/* Lane i of node q: the box of binary node n, or (n NULL) an inverted box no ray enters. */
+static void set_lane(cw_bvhw_node *q, int i, const cw_bvh_node *n)
 {
-    if (i == 0)
-        v->x = x;
-    else if (i == 1)
-        v->y = x;
-    else if (i == 2)
-        v->z = x;
-    else
-        v->w = x;
+    for (int a = 0; a < 3; a++) {
+        q->bound[a].v[i] = n ? n->lo[a] : FLT_MAX;
+        q->bound[3 + a].v[i] = n ? n->hi[a] : -FLT_MAX;
+    }
 }
 
-static void set_lane(cw_bvh4_node *q, int i, const cw_bvh_node *n)
+/* Builds the wide node for binary node i2 at out->nodes[out->num_nodes++]; returns its
+ * index and sets *need to the stack entries its subtree's traversal needs. The recursion
+ * is as deep as the binary tree (at most BVH_MAX_DEPTH). */
+static int collapse(const cw_bvh_node *n2, int i2, bvhw *out, int *need)
 {
-    f4_set(&q->lo_x, i, n ? n->lo[0] : 0.0f);
-    f4_set(&q->lo_y, i, n ? n->lo[1] : 0.0f);
-    f4_set(&q->lo_z, i, n ? n->lo[2] : 0.0f);
-    f4_set(&q->hi_x, i, n ? n->hi[0] : 0.0f);
-    f4_set(&q->hi_y, i, n ? n->hi[1] : 0.0f);
-    f4_set(&q->hi_z, i, n ? n->hi[2] : 0.0f);
-}
-
-/* Builds the 4-wide node for binary node i2 at out->nodes[out->num_nodes++]; returns
- * its index and sets *need to the stack entries its subtree's traversal needs. The
- * recursion is as deep as the binary tree (at most BVH_MAX_DEPTH). */
-static int collapse(const cw_bvh_node *n2, int i2, bvh4 *out, int *need)
-{
-    int slots[4], ns = 0, k = out->num_nodes++, i, interior = 0, deepest = 0;
-    cw_bvh4_node *q;
+    int slots[CW_BVH_WIDTH], ns = 0, k = out->num_nodes++, i, interior = 0, deepest = 0;
+    cw_bvhw_node *q;
 
     if (n2[i2].count > 0) {
         slots[ns++] = i2;
     } else {
         slots[ns++] = i2 + 1;
         slots[ns++] = n2[i2].start;
-        while (ns < 4) {
+        while (ns < CW_BVH_WIDTH) {
             int best = -1;
             double best_area = -1;
             for (i = 0; i < ns; i++)
@@ -318,7 +306,7 @@ static int collapse(const cw_bvh_node *n2, int i2, bvh4 *out, int *need)
             slots[best] = slots[best] + 1;
         }
     }
-    for (i = 0; i < 4; i++) {
+    for (i = 0; i < CW_BVH_WIDTH; i++) {
         q = &out->nodes[k];
         if (i >= ns) {
             set_lane(q, i, NULL);
@@ -344,7 +332,7 @@ static int collapse(const cw_bvh_node *n2, int i2, bvh4 *out, int *need)
     return k;
 }
 
-int bvh_collapse4(const bvh *b, bvh4 *out, char *err, size_t errlen)
+int bvh_collapse_wide(const bvh *b, bvhw *out, char *err, size_t errlen)
 {
     int need = 0;
     memset(out, 0, sizeof *out);
@@ -352,20 +340,20 @@ int bvh_collapse4(const bvh *b, bvh4 *out, char *err, size_t errlen)
         return 0;
     out->nodes = calloc((size_t)b->num_nodes, sizeof *out->nodes);
     if (!out->nodes) {
-        snprintf(err, errlen, "out of memory for the 4-wide BVH (%d nodes)", b->num_nodes);
+        snprintf(err, errlen, "out of memory for the wide BVH (%d nodes)", b->num_nodes);
         return -1;
     }
     collapse(b->nodes, 0, out, &need);
     out->stack_need = need + 1;
-    { /* about a third of the binary count is used: give the rest back */
-        cw_bvh4_node *shrunk = realloc(out->nodes, (size_t)out->num_nodes * sizeof *out->nodes);
+    { /* a fraction of the binary count is used: give the rest back */
+        cw_bvhw_node *shrunk = realloc(out->nodes, (size_t)out->num_nodes * sizeof *out->nodes);
         if (shrunk)
             out->nodes = shrunk;
     }
     return 0;
 }
 
-void bvh4_free(bvh4 *b)
+void bvhw_free(bvhw *b)
 {
     free(b->nodes);
     memset(b, 0, sizeof *b);

@@ -1,6 +1,7 @@
 /* The bounding volume hierarchy: a binned surface-area-heuristic (SAH) builder over
  * axis-aligned boxes, flattened depth-first into cw_bvh_node, and its collapse into the
- * 4-wide tree the kernels traverse (cw_bvh4_node, kernels/types.h). */
+ * wide tree the kernels traverse (cw_bvhw_node, kernels/types.h: CW_BVH_WIDTH children per
+ * node). */
 #ifndef CW_BVH_H
 #define CW_BVH_H
 
@@ -57,19 +58,19 @@ void bvh_free(bvh *b);
  * non-finite area weights every node by 1. 0 for an empty tree. */
 double bvh_sah_cost(const bvh *b);
 
-/* The 4-wide tree the kernels traverse: each node of a binary tree is merged with its
- * children (the child of largest area opened first) until it has four. Depth-first, the
- * root first. stack_need: the most entries a traversal stack holds (each node leaves up
- * to three children on it while it goes down the fourth). */
+/* The wide tree the kernels traverse: each node of a binary tree is merged with its
+ * children (the child of largest area opened first) until it has CW_BVH_WIDTH. Depth-first,
+ * the root first. stack_need: the most entries a traversal stack holds (each node leaves
+ * all but one of its interior children on it while it goes down that one). */
 typedef struct {
-    cw_bvh4_node *nodes;
+    cw_bvhw_node *nodes;
     int num_nodes;
     int stack_need;
-} bvh4;
+} bvhw;
 
 /* Collapses a built tree (b->num_nodes may be 0: an empty result). Returns 0, or -1 with
  * a message in err (out of memory). */
-int bvh_collapse4(const bvh *b, bvh4 *out, char *err, size_t errlen);
-void bvh4_free(bvh4 *b);
+int bvh_collapse_wide(const bvh *b, bvhw *out, char *err, size_t errlen);
+void bvhw_free(bvhw *b);
 
 #endif

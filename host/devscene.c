@@ -18,10 +18,11 @@ void devscene_world_arrays(const devscene *ds, devscene_world *w)
 #define DEVSCENE_SET(name, data, count)                                                            \
     w->name = (data);                                                                              \
     w->n_##name = (size_t)(count);
-    DEVSCENE_SET(nodes, ds->tree4.nodes, ds->tree4.num_nodes)
+    DEVSCENE_SET(nodes, ds->tree_wide.nodes, ds->tree_wide.num_nodes)
     DEVSCENE_SET(refs, ds->refs, ds->tree.num_refs)
     DEVSCENE_SET(spheres, ds->sph, ds->nsph)
     DEVSCENE_SET(triangles, ds->tri, ds->ntri)
+    DEVSCENE_SET(tri_blocks, ds->tri_blocks, ds->nblocks)
     DEVSCENE_SET(normals, ds->normals, ds->nnorm)
     DEVSCENE_SET(polygons, ds->pg, ds->npg)
     DEVSCENE_SET(poly_verts, ds->verts, ds->nverts)
@@ -57,6 +58,7 @@ void devscene_free(devscene *ds)
 {
     free(ds->sph);
     free(ds->tri);
+    free(ds->tri_blocks);
     free(ds->normals);
     free(ds->pg);
     free(ds->verts);
@@ -68,7 +70,7 @@ void devscene_free(devscene *ds)
     free(ds->box_ref);
     free(ds->refs);
     bvh_free(&ds->tree);
-    bvh4_free(&ds->tree4);
+    bvhw_free(&ds->tree_wide);
 }
 
 /* Adds the box of primitive ref, widened by a relative margin so that rounding in the
@@ -330,8 +332,70 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
     return 0;
 }
 
-/* Builds the BVH over the primitives' boxes, collapses it to the 4-wide tree the kernels
- * traverse, and turns its leaf entries into CW_REFs. */
+/* Whether the leaf of count references from refs[first] holds triangles only. */
+static int all_triangles(const int *refs, int first, int count)
+{
+    for (int k = first; k < first + count; k++)
+        if (CW_REF_KIND(refs[k]) != CW_PRIM_TRIANGLE)
+            return 0;
+    return 1;
+}
+
+static void set_lane(cw_float4 *v, int lane, float x)
+{
+    float *f = lane == 0 ? &v->x : lane == 1 ? &v->y : lane == 2 ? &v->z : &v->w;
+    *f = x;
+}
+
+/* Packs every leaf of triangles only into blocks of four (cw_tri4, in leaf order, so the
+ * kernels test them in the order of the references) and points the leaf at its blocks. */
+static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
+{
+    bvhw *t = &ds->tree_wide;
+    size_t nblocks = 0, b;
+    for (int n = 0; n < t->num_nodes; n++)
+        for (int i = 0; i < CW_BVH_WIDTH; i++) {
+            int c = t->nodes[n].count[i];
+            if (c > 0 && all_triangles(ds->refs, t->nodes[n].child[i], c))
+                nblocks += ((size_t)c + 3) / 4;
+        }
+    if (nblocks == 0)
+        return 0;
+    ds->tri_blocks = calloc(nblocks, sizeof *ds->tri_blocks);
+    if (!ds->tri_blocks) {
+        snprintf(err, errlen, "out of memory for %zu triangle blocks", nblocks);
+        return -1;
+    }
+    b = 0;
+    for (int n = 0; n < t->num_nodes; n++)
+        for (int i = 0; i < CW_BVH_WIDTH; i++) {
+            cw_bvhw_node *nd = &t->nodes[n];
+            int c = nd->count[i], first = nd->child[i];
+            if (c <= 0 || !all_triangles(ds->refs, first, c))
+                continue;
+            nd->child[i] = (int)b;
+            nd->count[i] = -1 - (c + 3) / 4;
+            for (int k = 0; k < c; k++) {
+                cw_tri4 *blk = &ds->tri_blocks[b + (size_t)k / 4];
+                int idx = CW_REF_INDEX(ds->refs[first + k]), lane = k % 4;
+                const cw_float4 *p[3] = {&ds->tri[idx].p0, &ds->tri[idx].p1, &ds->tri[idx].p2};
+                for (int v = 0; v < 3; v++) {
+                    set_lane(&blk->v[3 * v], lane, p[v]->x);
+                    set_lane(&blk->v[3 * v + 1], lane, p[v]->y);
+                    set_lane(&blk->v[3 * v + 2], lane, p[v]->z);
+                }
+                blk->index[lane] = idx;
+            }
+            for (int k = c; k % 4 != 0; k++)
+                ds->tri_blocks[b + (size_t)k / 4].index[k % 4] = -1;
+            b += ((size_t)c + 3) / 4;
+        }
+    ds->nblocks = (int)nblocks;
+    return 0;
+}
+
+/* Builds the BVH over the primitives' boxes, collapses it to the wide tree the kernels
+ * traverse, turns its leaf entries into CW_REFs and packs the leaves of triangles only. */
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
 {
     int i;
@@ -339,12 +403,12 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
         return -1;
     free(ds->boxes); /* the builder has its own copy of what it needs */
     ds->boxes = NULL;
-    if (bvh_collapse4(&ds->tree, &ds->tree4, err, errlen) != 0)
+    if (bvh_collapse_wide(&ds->tree, &ds->tree_wide, err, errlen) != 0)
         return -1;
-    if (ds->tree4.stack_need > CW_BVH_STACK) {
+    if (ds->tree_wide.stack_need > CW_BVH_STACK) {
         snprintf(err, errlen,
                  "the BVH needs a traversal stack of %d entries, more than the kernels' %d",
-                 ds->tree4.stack_need, CW_BVH_STACK);
+                 ds->tree_wide.stack_need, CW_BVH_STACK);
         return -1;
     }
     ds->refs = malloc(((size_t)ds->tree.num_refs + 1) * sizeof *ds->refs);
@@ -361,5 +425,5 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
     free(ds->tree.refs);
     ds->tree.nodes = NULL;
     ds->tree.refs = NULL;
-    return 0;
+    return pack_triangle_leaves(ds, err, errlen);
 }

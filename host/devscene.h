@@ -15,6 +15,7 @@
 typedef struct {
     cw_sphere *sph;
     cw_triangle *tri;
+    cw_tri4 *tri_blocks; /* the leaves of triangles only, four to a block */
     cw_float4 *normals;
     cw_polygon *pg;
     cw_float4 *verts;
@@ -26,9 +27,9 @@ typedef struct {
     int *refs;      /* BVH leaf entries as CW_REFs */
     int *bands;     /* edge bands of large polygons (cw_polygon) */
     size_t nbands, bands_cap;
-    int nsph, ntri, nnorm, npg, nverts, ncone, nbox;
+    int nsph, ntri, nnorm, npg, nverts, ncone, nbox, nblocks;
     bvh tree; /* the binary tree: after devscene_build_bvh only its counts and depth */
-    bvh4 tree4;
+    bvhw tree_wide;
     int dropped;      /* primitives left out as degenerate */
     int mirrors;      /* some material has km > 0 */
     int transmitters; /* some material has kt > 0 */
@@ -53,8 +54,9 @@ cw_float4 devscene_f4(vec3f v, float w);
  * (too many primitives, out of memory); call devscene_free either way. */
 int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen);
 
-/* Builds the BVH over the boxes, collapses it to the 4-wide tree the kernels traverse and
- * turns its leaf entries into CW_REFs; then frees what only the build needed (the boxes,
+/* Builds the BVH over the boxes, collapses it to the wide tree the kernels traverse, turns
+ * its leaf entries into CW_REFs and packs its leaves of triangles only into blocks of four
+ * (cw_tri4); then frees what only the build needed (the boxes,
  * the box map, the binary tree's arrays). Returns 0, or -1 with err. */
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen);
 

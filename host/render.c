@@ -22,6 +22,7 @@
 _Static_assert(sizeof(cw_float4) == 16, "cw_float4 must be 16 bytes");
 _Static_assert(sizeof(cw_sphere) == 32, "cw_sphere layout");
 _Static_assert(sizeof(cw_triangle) == 64, "cw_triangle layout");
+_Static_assert(sizeof(cw_tri4) == 160, "cw_tri4 layout");
 _Static_assert(sizeof(cw_cone) == 48, "cw_cone layout");
 _Static_assert(sizeof(cw_shadow_ray) == 64, "cw_shadow_ray layout");
 _Static_assert(sizeof(cw_polygon) == 48, "cw_polygon layout");
@@ -31,7 +32,7 @@ _Static_assert(sizeof(cw_light) == 32, "cw_light layout");
 _Static_assert(sizeof(cw_frame) == 192, "cw_frame layout");
 _Static_assert(sizeof(cw_ray) == 64, "cw_ray layout");
 _Static_assert(sizeof(cw_hit) == 32, "cw_hit layout");
-_Static_assert(sizeof(cw_bvh4_node) == 128, "cw_bvh4_node layout");
+_Static_assert(sizeof(cw_bvhw_node) == 32 * CW_BVH_WIDTH, "cw_bvhw_node layout");
 _Static_assert(CW_MAX_DEPTH <= CW_PIX_STACK,
                "the per-pixel kernel's ray stack holds max_depth rays");
 _Static_assert(CW_COUNT_DEPTH < CW_NUM_COUNTERS, "counters");
@@ -299,7 +300,7 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
 
     fill_view(f, s);
     f->num_lights = (int)s->lights.count;
-    f->num_nodes = ds.tree4.num_nodes;
+    f->num_nodes = ds.tree_wide.num_nodes;
     f->spd_rays = r->settings.spd;
 
     if (renderer_ensure_program(r, renderer_strategy(r), err, errlen) != 0)

@@ -1,13 +1,23 @@
 /* What differs between OpenCL C 1.2 and host C99, and nothing else: the address-space
  * and inline keywords (CW_GLOBAL, CW_INLINE, CW_FORCE_INLINE), the vector types
- * (cw_float4, vec3, v4), the math functions (cw_sqrt ...), the atomics and the
- * contraction pragma. The kernel headers are written with these so that they compile
- * both as OpenCL C (the kernels) and as host C99 (host code and tests). OpenCL C appears
+ * (cw_float4, vec3, cw_lanes), the math functions (cw_sqrt ...), the bit scan cw_ctz, the
+ * atomics and the contraction pragma. The kernel headers are written with these so that they
+ * compile both as OpenCL C (the kernels) and as host C99 (host code and tests). OpenCL C appears
  * elsewhere only in the OpenCL branch of vecmath.h (vector operators and built-ins) and
  * in the entry kernels of clwhitted.cl (__kernel, __global, __local, work-item functions
  * and barriers), which the host never compiles. */
 #ifndef CW_COMPAT_H
 #define CW_COMPAT_H
+
+/* The width of the BVH the kernels traverse (cw_bvhw_node, types.h): the child boxes of a
+ * node are tested together, as one vector of CW_BVH_WIDTH lanes: 8 fills an AVX register,
+ * 4 an SSE one. */
+#ifndef CW_BVH_WIDTH
+#define CW_BVH_WIDTH 8
+#endif
+#if CW_BVH_WIDTH != 4 && CW_BVH_WIDTH != 8
+#error "CW_BVH_WIDTH must be 4 or 8"
+#endif
 
 #ifdef __OPENCL_VERSION__
 
@@ -18,8 +28,14 @@
 
 typedef float4 cw_float4;
 typedef float3 vec3;
-/* 4-wide: the four lanes of one box test of the 4-wide BVH */
-typedef float4 v4;
+/* the lanes of one box test of the wide BVH */
+#if CW_BVH_WIDTH == 8
+typedef float8 cw_lanes;
+typedef int8 cw_lanes_int;
+#else
+typedef float4 cw_lanes;
+typedef int4 cw_lanes_int;
+#endif
 
 #define cw_sqrt(x) sqrt(x)
 #define cw_fabs(x) fabs(x)
@@ -31,6 +47,8 @@ typedef float4 v4;
 #define cw_nextafter(a, b) nextafter((a), (b))
 #define cw_copysign(a, b) copysign((a), (b))
 #define CW_INFINITY INFINITY
+/* the index of the lowest set bit of x (x != 0); OpenCL 1.2 has clz but not ctz */
+#define cw_ctz(x) (31 - (int)clz((x) & (0u - (x))))
 
 /* The robust path relies on a*b - c*d being computed the same way for both triangles of
  * a shared edge: no fused multiply-add contraction. */
@@ -71,7 +89,9 @@ typedef struct {
     float x, y, z;
 } vec3;
 
-typedef cw_float4 v4;
+typedef struct {
+    float v[CW_BVH_WIDTH];
+} __attribute__((aligned(4 * CW_BVH_WIDTH))) cw_lanes;
 
 #define cw_sqrt(x) sqrtf(x)
 #define cw_fabs(x) fabsf(x)
@@ -88,6 +108,7 @@ CW_INLINE int cw_atomic_add_int(int *p, int v)
 #define cw_nextafter(a, b) nextafterf((a), (b))
 #define cw_copysign(a, b) copysignf((a), (b))
 #define CW_INFINITY INFINITY
+#define cw_ctz(x) __builtin_ctz(x)
 CW_INLINE void cw_atomic_add(float *p, float v)
 {
     *p += v;

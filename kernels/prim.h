@@ -59,6 +59,27 @@ CW_FORCE_INLINE void prim_intersect(const cw_world *w, int ref, const cw_rayinfo
     }
 }
 
+#if CW_HAS_TRIANGLES
+/* Tests the ray against the four triangles of block `block` (a leaf of triangles only,
+ * cw_tri4), never the primitive skip - 1; on a hit closer than *tmax, records it in *hit
+ * and lowers *tmax: what prim_intersect does for each of them in lane order. */
+CW_FORCE_INLINE void prim_tri4(const cw_world *w, int block, const cw_rayinfo *ri, float tmin,
+                               int skip, float *tmax, cw_hit *hit)
+{
+    CW_GLOBAL const cw_tri4 *b = &w->tri_blocks[block];
+    float t = 0.0f, u = 0.0f, v = 0.0f;
+    int lane = isect_tri4(b, ri, tmin, *tmax, skip, &t, &u, &v);
+    if (lane >= 0) {
+        *tmax = t;
+        hit->t = t;
+        hit->u = u;
+        hit->v = v;
+        hit->kind = CW_PRIM_TRIANGLE;
+        hit->index = b->index[lane];
+    }
+}
+#endif
+
 /* The surface at a hit (not a miss) of the ray o + t d: the kind's surface_* function,
  * given the point o + t d. */
 CW_INLINE cw_surface prim_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d)

@@ -1,9 +1,9 @@
-/* bvh_: closest-hit and any-hit traversal of the 4-wide bounding volume hierarchy
- * (cw_bvh4_node), built on the host as a binary SAH tree (host/bvh.c) and collapsed so
- * that one 4-wide box test covers up to four children; the primitives of a leaf are
- * tested through prim_intersect (prim.h). The traversal stack holds CW_BVH_STACK entries;
- * the host checks that its tree never needs more. (The host's builder, host/bvh.h, shares
- * the bvh_ prefix: no function name is in both.) */
+/* bvh_: closest-hit and any-hit traversal of the wide bounding volume hierarchy
+ * (cw_bvhw_node), built on the host as a binary SAH tree (host/bvh.c) and collapsed so that
+ * one box test over CW_BVH_WIDTH lanes covers up to that many children; the primitives of
+ * a leaf are tested through prim_intersect (prim.h). The traversal stack holds
+ * CW_BVH_STACK entries; the host checks that its tree never needs more. (The host's
+ * builder, host/bvh.h, shares the bvh_ prefix: no function name is in both.) */
 #ifndef CW_TRAVERSE_H
 #define CW_TRAVERSE_H
 
@@ -14,31 +14,37 @@
 #include "vecmath.h"
 #include "world.h"
 
-/* The four child boxes of a node against [tmin, tmax] at once: entry and exit distances
- * per lane; a lane is hit when entry <= exit. The robust path widens the exit by
- * 1 + 2 gamma(3) (Ize 2013). */
-CW_INLINE void bvh_box4(CW_GLOBAL const cw_bvh4_node *nd, const cw_rayinfo *ri, float tmin,
-                        float tmax, v4 *t_enter, v4 *t_exit)
+/* The child boxes of a node against [tmin, tmax] at once: the lanes a ray enters, as a bit
+ * mask, and each lane's entry distance in enter[]. Per axis the near plane is the one the
+ * ray's direction meets first (ri->near), which gives the slab test's min and max without
+ * computing both; an empty lane's inverted box is never entered. The robust path widens
+ * the exit by 1 + 2 gamma(3) (Ize 2013). */
+CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo *ri, float tmin,
+                             float tmax, float *enter)
 {
-    v4 ox = v4_splat(ri->o.x), oy = v4_splat(ri->o.y), oz = v4_splat(ri->o.z);
-    v4 ix = v4_splat(ri->inv.x), iy = v4_splat(ri->inv.y), iz = v4_splat(ri->inv.z);
-    v4 tx0 = v4_mul(v4_sub(nd->lo_x, ox), ix), tx1 = v4_mul(v4_sub(nd->hi_x, ox), ix);
-    v4 ty0 = v4_mul(v4_sub(nd->lo_y, oy), iy), ty1 = v4_mul(v4_sub(nd->hi_y, oy), iy);
-    v4 tz0 = v4_mul(v4_sub(nd->lo_z, oz), iz), tz1 = v4_mul(v4_sub(nd->hi_z, oz), iz);
-    *t_enter = v4_max(v4_max(v4_min(tx0, tx1), v4_min(ty0, ty1)),
-                      v4_max(v4_min(tz0, tz1), v4_splat(tmin)));
-    *t_exit = v4_min(v4_min(v4_max(tx0, tx1), v4_max(ty0, ty1)),
-                     v4_min(v4_max(tz0, tz1), v4_splat(tmax)));
+    cw_lanes ox = vl_splat(ri->o.x), oy = vl_splat(ri->o.y), oz = vl_splat(ri->o.z);
+    cw_lanes ix = vl_splat(ri->inv.x), iy = vl_splat(ri->inv.y), iz = vl_splat(ri->inv.z);
+    cw_lanes nx = vl_mul(vl_sub(nd->bound[ri->near[0]], ox), ix);
+    cw_lanes ny = vl_mul(vl_sub(nd->bound[ri->near[1]], oy), iy);
+    cw_lanes nz = vl_mul(vl_sub(nd->bound[ri->near[2]], oz), iz);
+    cw_lanes fx = vl_mul(vl_sub(nd->bound[3 - ri->near[0]], ox), ix);
+    cw_lanes fy = vl_mul(vl_sub(nd->bound[5 - ri->near[1]], oy), iy);
+    cw_lanes fz = vl_mul(vl_sub(nd->bound[7 - ri->near[2]], oz), iz);
+    cw_lanes te = vl_max(vl_max(nx, ny), vl_max(nz, vl_splat(tmin)));
+    cw_lanes tx = vl_min(vl_min(fx, fy), vl_min(fz, vl_splat(tmax)));
 #if !CW_FAST
-    *t_exit = v4_mul(*t_exit, v4_splat(1.0000004f));
+    tx = vl_mul(tx, vl_splat(1.0000004f));
 #endif
+    vl_store(te, enter);
+    return vl_le_mask(te, tx);
 }
 
 /* Closest hit in (tmin, tmax), never the primitive skip - 1 (skip = 0: none), written to
- * *out. Leaf children are tested as they are found; interior children are visited nearest
- * first, the others stacked with their entry distance and skipped when a closer hit has
- * been found by the time they come off the stack. (*out is private memory: the hit is
- * written through a pointer rather than returned, for Oclgrind; see docs/portability.md.) */
+ * *out. Leaf children are tested as they are found (in lane order); interior children are
+ * visited nearest first, the others stacked with their entry distance and skipped when a
+ * closer hit has been found by the time they come off the stack. (*out is private memory:
+ * the hit is written through a pointer rather than returned, for Oclgrind; see
+ * docs/portability.md.) */
 CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax, int skip,
                            cw_hit *out)
 {
@@ -60,23 +66,29 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
         return;
     }
     for (;;) {
-        CW_GLOBAL const cw_bvh4_node *nd = &w->nodes[node];
-        int ci[4], n = 0;
-        float ct[4];
-        v4 te, tx;
-        bvh_box4(nd, &ri, tmin, t_best, &te, &tx);
-        for (i = 0; i < 4; i++) {
-            int count = nd->count[i];
-            float e = v4_get(te, i);
-            if (count < 0 || !(e <= v4_get(tx, i)))
-                continue;
+        CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[node];
+        int ci[CW_BVH_WIDTH], n = 0;
+        float ct[CW_BVH_WIDTH], enter[CW_BVH_WIDTH];
+        unsigned mask = bvh_boxes(nd, &ri, tmin, t_best, enter);
+        while (mask != 0u) {
+            int count;
+            float e;
+            i = cw_ctz(mask);
+            mask &= mask - 1u;
+            count = nd->count[i];
+            e = enter[i];
             if (count > 0) {
                 for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                     int ref = w->refs[k];
                     if (ref + 1 != skip)
                         prim_intersect(w, ref, &ri, tmin, &t_best, &hit);
                 }
-            } else {
+#if CW_HAS_TRIANGLES
+            } else if (count < -1) { /* blocks of four triangles */
+                for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++)
+                    prim_tri4(w, k, &ri, tmin, skip, &t_best, &hit);
+#endif
+            } else if (count == 0) {
                 /* insertion by entry distance, nearest first */
                 int j = n++;
                 while (j > 0 && ct[j - 1] > e) {
@@ -126,19 +138,30 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
         return 0;
     stack[sp++] = 0;
     while (sp > 0) {
-        CW_GLOBAL const cw_bvh4_node *nd;
-        v4 te, tx;
+        CW_GLOBAL const cw_bvhw_node *nd;
+        float enter[CW_BVH_WIDTH];
+        unsigned mask;
         node = stack[--sp];
         nd = &w->nodes[node];
-        bvh_box4(nd, &ri, tmin, tmax, &te, &tx);
-        for (i = 0; i < 4; i++) {
-            int count = nd->count[i];
-            if (count < 0 || !(v4_get(te, i) <= v4_get(tx, i)))
-                continue;
+        mask = bvh_boxes(nd, &ri, tmin, tmax, enter);
+        while (mask != 0u) {
+            int count;
+            i = cw_ctz(mask);
+            mask &= mask - 1u;
+            count = nd->count[i];
             if (count == 0) {
                 stack[sp++] = nd->child[i];
                 continue;
             }
+#if CW_HAS_TRIANGLES
+            for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++) {
+                t_lim = tmax;
+                hit.kind = CW_PRIM_NONE;
+                prim_tri4(w, k, &ri, tmin, skip, &t_lim, &hit);
+                if (hit.kind != CW_PRIM_NONE)
+                    return 1;
+            }
+#endif
             for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                 int ref = w->refs[k];
                 if (ref + 1 == skip)

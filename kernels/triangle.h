@@ -1,5 +1,5 @@
-/* Triangles (cw_triangle), flat or smooth (vertex normals): the ray-triangle test and the
- * surface at a hit. */
+/* Triangles (cw_triangle), flat or smooth (vertex normals): the ray-triangle test, one
+ * triangle at a time or four of a leaf at once (cw_tri4), and the surface at a hit. */
 #ifndef CW_TRIANGLE_H
 #define CW_TRIANGLE_H
 
@@ -42,6 +42,53 @@ CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo 
     *v_out = v;
     return 1;
 }
+
+/* The four triangles of block b at once (Moeller-Trumbore, each lane as isect_triangle):
+ * the closest hit in (tmin, tmax), never the triangle whose CW_REF is skip - 1. Returns its
+ * lane, the first of equally close ones (as testing them one by one in lane order), or -1. */
+CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float tmin, float tmax,
+                         int skip, float *t_out, float *u_out, float *v_out)
+{
+    cw_float4 dx = v4_splat(ri->d.x), dy = v4_splat(ri->d.y), dz = v4_splat(ri->d.z);
+    cw_float4 e1x = v4_sub(b->v[3], b->v[0]), e1y = v4_sub(b->v[4], b->v[1]);
+    cw_float4 e1z = v4_sub(b->v[5], b->v[2]);
+    cw_float4 e2x = v4_sub(b->v[6], b->v[0]), e2y = v4_sub(b->v[7], b->v[1]);
+    cw_float4 e2z = v4_sub(b->v[8], b->v[2]);
+    cw_float4 px = v4_sub(v4_mul(dy, e2z), v4_mul(dz, e2y));
+    cw_float4 py = v4_sub(v4_mul(dz, e2x), v4_mul(dx, e2z));
+    cw_float4 pz = v4_sub(v4_mul(dx, e2y), v4_mul(dy, e2x));
+    cw_float4 det = v4_add(v4_add(v4_mul(e1x, px), v4_mul(e1y, py)), v4_mul(e1z, pz));
+    cw_float4 inv = v4_div(v4_splat(1.0f), det);
+    cw_float4 sx = v4_sub(v4_splat(ri->o.x), b->v[0]), sy = v4_sub(v4_splat(ri->o.y), b->v[1]);
+    cw_float4 sz = v4_sub(v4_splat(ri->o.z), b->v[2]);
+    cw_float4 u = v4_mul(v4_add(v4_add(v4_mul(sx, px), v4_mul(sy, py)), v4_mul(sz, pz)), inv);
+    cw_float4 qx = v4_sub(v4_mul(sy, e1z), v4_mul(sz, e1y));
+    cw_float4 qy = v4_sub(v4_mul(sz, e1x), v4_mul(sx, e1z));
+    cw_float4 qz = v4_sub(v4_mul(sx, e1y), v4_mul(sy, e1x));
+    cw_float4 v = v4_mul(v4_add(v4_add(v4_mul(dx, qx), v4_mul(dy, qy)), v4_mul(dz, qz)), inv);
+    cw_float4 t = v4_mul(v4_add(v4_add(v4_mul(e2x, qx), v4_mul(e2y, qy)), v4_mul(e2z, qz)), inv);
+    float ld[4], lu[4], lv[4], lt[4];
+    int i, best = -1;
+    v4_store(det, ld);
+    v4_store(u, lu);
+    v4_store(v, lv);
+    v4_store(t, lt);
+    for (i = 0; i < 4; i++) {
+        int idx = b->index[i];
+        if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip || cw_fabs(ld[i]) < 1e-9f)
+            continue;
+        if (lu[i] < 0.0f || lu[i] > 1.0f || lv[i] < 0.0f || lu[i] + lv[i] > 1.0f)
+            continue;
+        if (!(lt[i] > tmin && lt[i] < tmax))
+            continue;
+        tmax = lt[i];
+        *t_out = lt[i];
+        *u_out = lu[i];
+        *v_out = lv[i];
+        best = i;
+    }
+    return best;
+}
 #else
 /* Ray-triangle, robust path: the watertight test of Woop, Benthin and Wald (JCGT 2013).
  * The vertices are moved to the ray origin, permuted so that the ray's largest direction
@@ -83,6 +130,58 @@ CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo 
     *u_out = v * inv;
     *v_out = w * inv;
     return 1;
+}
+
+/* The four triangles of block b at once, each lane with exactly isect_triangle's float
+ * operations (the same hits, bit for bit): the closest hit in (tmin, tmax), never the
+ * triangle whose CW_REF is skip - 1. Returns its lane, the first of equally close ones (as
+ * testing them one by one in lane order), or -1. */
+CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float tmin, float tmax,
+                         int skip, float *t_out, float *u_out, float *v_out)
+{
+    int kx = ri->kx, ky = ri->ky, kz = ri->kz;
+    cw_float4 ox = v4_splat(isect_axis(ri->o, kx)), oy = v4_splat(isect_axis(ri->o, ky));
+    cw_float4 oz = v4_splat(isect_axis(ri->o, kz));
+    cw_float4 sx = v4_splat(ri->sx), sy = v4_splat(ri->sy), sz = v4_splat(ri->sz);
+    cw_float4 az = v4_sub(b->v[kz], oz), bz = v4_sub(b->v[3 + kz], oz);
+    cw_float4 cz = v4_sub(b->v[6 + kz], oz);
+    cw_float4 ax = v4_sub(v4_sub(b->v[kx], ox), v4_mul(sx, az));
+    cw_float4 ay = v4_sub(v4_sub(b->v[ky], oy), v4_mul(sy, az));
+    cw_float4 bx = v4_sub(v4_sub(b->v[3 + kx], ox), v4_mul(sx, bz));
+    cw_float4 by = v4_sub(v4_sub(b->v[3 + ky], oy), v4_mul(sy, bz));
+    cw_float4 cx = v4_sub(v4_sub(b->v[6 + kx], ox), v4_mul(sx, cz));
+    cw_float4 cy = v4_sub(v4_sub(b->v[6 + ky], oy), v4_mul(sy, cz));
+    cw_float4 u = v4_sub(v4_mul(cx, by), v4_mul(cy, bx));
+    cw_float4 v = v4_sub(v4_mul(ax, cy), v4_mul(ay, cx));
+    cw_float4 w = v4_sub(v4_mul(bx, ay), v4_mul(by, ax));
+    cw_float4 det = v4_add(v4_add(u, v), w);
+    cw_float4 tt = v4_add(v4_add(v4_mul(u, v4_mul(sz, az)), v4_mul(v, v4_mul(sz, bz))),
+                          v4_mul(w, v4_mul(sz, cz)));
+    cw_float4 inv = v4_div(v4_splat(1.0f), det);
+    float lu[4], lv[4], lw[4], ld[4], lt[4], li[4];
+    int i, best = -1;
+    v4_store(u, lu);
+    v4_store(v, lv);
+    v4_store(w, lw);
+    v4_store(det, ld);
+    v4_store(v4_mul(tt, inv), lt);
+    v4_store(inv, li);
+    for (i = 0; i < 4; i++) {
+        int idx = b->index[i];
+        if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip)
+            continue;
+        if ((lu[i] < 0.0f || lv[i] < 0.0f || lw[i] < 0.0f) &&
+            (lu[i] > 0.0f || lv[i] > 0.0f || lw[i] > 0.0f))
+            continue;
+        if (ld[i] == 0.0f || !(lt[i] > tmin && lt[i] < tmax))
+            continue;
+        tmax = lt[i];
+        *t_out = lt[i];
+        *u_out = lv[i] * li[i];
+        *v_out = lw[i] * li[i];
+        best = i;
+    }
+    return best;
 }
 #endif
 

@@ -37,6 +37,15 @@ typedef struct {
     int pad0, pad1;
 } cw_triangle;
 
+/* Up to four triangles of one BVH leaf side by side, for one 4-wide ray-triangle test
+ * (triangle.h): v[3 * k + a] holds coordinate a (x, y, z) of vertex k (p0, p1, p2), lane i
+ * that of triangle index[i] (an index into the triangle array); an unused lane has index
+ * -1 and zero vertices. */
+typedef struct {
+    cw_float4 v[9];
+    int index[4];
+} cw_tri4;
+
 /* An open cone or cylinder (no caps) between a base and an apex disc. */
 typedef struct {
     cw_float4 base; /* xyz: centre of the base disc, w: its radius */
@@ -68,7 +77,7 @@ typedef struct {
 #define CW_GROUP_SIZE 64
 
 /* Entries of the kernels' BVH traversal stack (the host checks its tree needs no more). */
-#define CW_BVH_STACK 96
+#define CW_BVH_STACK 128
 
 /* The per-pixel kernel's pending rays (pixel.h), with refraction: a queue of CW_PIX_QUEUE
  * rays for the breadth-first walk of a pixel's ray tree (every level up to depth 6 fits),
@@ -82,14 +91,18 @@ typedef struct {
 #endif
 #define CW_PIX_STACK 64
 
-/* A node of the 4-wide BVH the kernels traverse, collapsed from the host's binary one
- * (host/bvh.h): the boxes of up to four children side by side, for one 4-wide box test. */
+/* A node of the wide BVH the kernels traverse, collapsed from the host's binary one
+ * (host/bvh.h): the boxes of up to CW_BVH_WIDTH children side by side, for one box test
+ * over all lanes. bound[0..2]: lower corners (x, y, z), bound[3..5]: upper corners, so a
+ * ray picks each axis's near plane by the sign of its direction. An empty slot has an
+ * inverted box (lower > upper), which no ray hits. */
 typedef struct {
-    cw_float4 lo_x, lo_y, lo_z; /* lower corners of the four child boxes */
-    cw_float4 hi_x, hi_y, hi_z; /* upper corners */
-    int child[4]; /* interior child: its node index; leaf child: first entry in refs */
-    int count[4]; /* leaf child: number of references (> 0); interior: 0; empty slot: -1 */
-} cw_bvh4_node;
+    cw_lanes bound[6];
+    int child[CW_BVH_WIDTH]; /* interior child: its node index; leaf: first entry in refs */
+    int count[CW_BVH_WIDTH]; /* leaf: number of references (> 0), or for a leaf of
+                              * triangles only, -1 - its number of cw_tri4 blocks (< -1),
+                              * child then the first block; interior: 0; empty: -1 */
+} cw_bvhw_node;
 
 typedef struct {
     cw_float4 ka; /* rgb ambient, w: Phong exponent p */

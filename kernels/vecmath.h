@@ -1,7 +1,7 @@
-/* v3_, v4_: vector arithmetic on vec3 (three floats) and v4 (four floats: the lanes of one
- * 4-wide box test of the BVH), for the kernel headers: written once for OpenCL C (vector
- * operators and built-ins) and once for host C99 (the structs of compat.h), so that the
- * kernel headers compile as both. */
+/* v3_, v4_, vl_: vector arithmetic on vec3 (three floats), cw_float4 and cw_lanes (CW_BVH_WIDTH
+ * floats: the lanes of one box test of the wide BVH), for the kernel headers: written once for
+ * OpenCL C (vector operators and built-ins) and once for host C99 (the structs of compat.h), so
+ * that the kernel headers compile as both. */
 #ifndef CW_VECMATH_H
 #define CW_VECMATH_H
 
@@ -20,6 +20,31 @@ CW_INLINE vec3 v3_from4(cw_float4 a)
 CW_INLINE cw_float4 v4_from3(vec3 a, float w)
 {
     return (float4)(a, w);
+}
+/* four lanes (the triangles of a cw_tri4) */
+CW_INLINE cw_float4 v4_splat(float a)
+{
+    return (float4)(a);
+}
+CW_INLINE cw_float4 v4_add(cw_float4 a, cw_float4 b)
+{
+    return a + b;
+}
+CW_INLINE cw_float4 v4_sub(cw_float4 a, cw_float4 b)
+{
+    return a - b;
+}
+CW_INLINE cw_float4 v4_mul(cw_float4 a, cw_float4 b)
+{
+    return a * b;
+}
+CW_INLINE cw_float4 v4_div(cw_float4 a, cw_float4 b)
+{
+    return a / b;
+}
+CW_INLINE void v4_store(cw_float4 a, float *p)
+{
+    vstore4(a, 0, p);
 }
 CW_INLINE vec3 v3_add(vec3 a, vec3 b)
 {
@@ -53,31 +78,48 @@ CW_INLINE vec3 v3_norm(vec3 a)
 {
     return normalize(a);
 }
-/* 4-wide */
-CW_INLINE v4 v4_splat(float a)
+/* the lanes of one box test */
+CW_INLINE cw_lanes vl_splat(float a)
 {
-    return (float4)(a);
+    return (cw_lanes)(a);
 }
-CW_INLINE v4 v4_sub(v4 a, v4 b)
+CW_INLINE cw_lanes vl_sub(cw_lanes a, cw_lanes b)
 {
     return a - b;
 }
-CW_INLINE v4 v4_mul(v4 a, v4 b)
+CW_INLINE cw_lanes vl_mul(cw_lanes a, cw_lanes b)
 {
     return a * b;
 }
 /* min and max without fmin/fmax's NaN rules (the box test never sees a NaN) */
-CW_INLINE v4 v4_min(v4 a, v4 b)
+CW_INLINE cw_lanes vl_min(cw_lanes a, cw_lanes b)
 {
     return a < b ? a : b;
 }
-CW_INLINE v4 v4_max(v4 a, v4 b)
+CW_INLINE cw_lanes vl_max(cw_lanes a, cw_lanes b)
 {
     return a > b ? a : b;
 }
-CW_INLINE float v4_get(v4 a, int i)
+/* The lanes where a <= b, as a bit mask (bit i: lane i). */
+CW_INLINE unsigned vl_le_mask(cw_lanes a, cw_lanes b)
 {
-    return i == 0 ? a.x : (i == 1 ? a.y : (i == 2 ? a.z : a.w));
+#if CW_BVH_WIDTH == 8
+    int8 m = (a <= b) & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    int4 h = m.lo | m.hi;
+#else
+    int4 h = (a <= b) & (int4)(1, 2, 4, 8);
+#endif
+    int2 q = h.lo | h.hi;
+    return (unsigned)(q.x | q.y);
+}
+/* p[0, CW_BVH_WIDTH) = the lanes of a */
+CW_INLINE void vl_store(cw_lanes a, float *p)
+{
+#if CW_BVH_WIDTH == 8
+    vstore8(a, 0, p);
+#else
+    vstore4(a, 0, p);
+#endif
 }
 #else /* host C99 */
 
@@ -101,6 +143,33 @@ CW_INLINE cw_float4 v4_from3(vec3 a, float w)
     r.z = a.z;
     r.w = w;
     return r;
+}
+#define V4_OP(name, op)                                                                            \
+    CW_INLINE cw_float4 name(cw_float4 a, cw_float4 b)                                             \
+    {                                                                                              \
+        a.x = a.x op b.x;                                                                          \
+        a.y = a.y op b.y;                                                                          \
+        a.z = a.z op b.z;                                                                          \
+        a.w = a.w op b.w;                                                                          \
+        return a;                                                                                  \
+    }
+V4_OP(v4_add, +)
+V4_OP(v4_sub, -)
+V4_OP(v4_mul, *)
+V4_OP(v4_div, /)
+#undef V4_OP
+CW_INLINE cw_float4 v4_splat(float a)
+{
+    cw_float4 r;
+    r.x = r.y = r.z = r.w = a;
+    return r;
+}
+CW_INLINE void v4_store(cw_float4 a, float *p)
+{
+    p[0] = a.x;
+    p[1] = a.y;
+    p[2] = a.z;
+    p[3] = a.w;
 }
 CW_INLINE vec3 v3_add(vec3 a, vec3 b)
 {
@@ -134,47 +203,56 @@ CW_INLINE vec3 v3_norm(vec3 a)
 {
     return v3_scale(a, 1.0f / v3_len(a));
 }
-CW_INLINE v4 v4_splat(float a)
+CW_INLINE cw_lanes vl_splat(float a)
 {
-    v4 r;
-    r.x = r.y = r.z = r.w = a;
+    cw_lanes r;
+    int i;
+    for (i = 0; i < CW_BVH_WIDTH; i++)
+        r.v[i] = a;
     return r;
 }
-CW_INLINE v4 v4_sub(v4 a, v4 b)
+CW_INLINE cw_lanes vl_sub(cw_lanes a, cw_lanes b)
 {
-    a.x -= b.x;
-    a.y -= b.y;
-    a.z -= b.z;
-    a.w -= b.w;
+    int i;
+    for (i = 0; i < CW_BVH_WIDTH; i++)
+        a.v[i] -= b.v[i];
     return a;
 }
-CW_INLINE v4 v4_mul(v4 a, v4 b)
+CW_INLINE cw_lanes vl_mul(cw_lanes a, cw_lanes b)
 {
-    a.x *= b.x;
-    a.y *= b.y;
-    a.z *= b.z;
-    a.w *= b.w;
+    int i;
+    for (i = 0; i < CW_BVH_WIDTH; i++)
+        a.v[i] *= b.v[i];
     return a;
 }
-CW_INLINE v4 v4_min(v4 a, v4 b)
+CW_INLINE cw_lanes vl_min(cw_lanes a, cw_lanes b)
 {
-    a.x = a.x < b.x ? a.x : b.x;
-    a.y = a.y < b.y ? a.y : b.y;
-    a.z = a.z < b.z ? a.z : b.z;
-    a.w = a.w < b.w ? a.w : b.w;
+    int i;
+    for (i = 0; i < CW_BVH_WIDTH; i++)
+        a.v[i] = a.v[i] < b.v[i] ? a.v[i] : b.v[i];
     return a;
 }
-CW_INLINE v4 v4_max(v4 a, v4 b)
+CW_INLINE cw_lanes vl_max(cw_lanes a, cw_lanes b)
 {
-    a.x = a.x > b.x ? a.x : b.x;
-    a.y = a.y > b.y ? a.y : b.y;
-    a.z = a.z > b.z ? a.z : b.z;
-    a.w = a.w > b.w ? a.w : b.w;
+    int i;
+    for (i = 0; i < CW_BVH_WIDTH; i++)
+        a.v[i] = a.v[i] > b.v[i] ? a.v[i] : b.v[i];
     return a;
 }
-CW_INLINE float v4_get(v4 a, int i)
+CW_INLINE unsigned vl_le_mask(cw_lanes a, cw_lanes b)
 {
-    return i == 0 ? a.x : (i == 1 ? a.y : (i == 2 ? a.z : a.w));
+    unsigned m = 0;
+    int i;
+    for (i = 0; i < CW_BVH_WIDTH; i++)
+        if (a.v[i] <= b.v[i])
+            m |= 1u << i;
+    return m;
+}
+CW_INLINE void vl_store(cw_lanes a, float *p)
+{
+    int i;
+    for (i = 0; i < CW_BVH_WIDTH; i++)
+        p[i] = a.v[i];
 }
 #endif
 

@@ -11,11 +11,12 @@
 
 /* X(element type, name, what): one line per buffer; `what` names it in messages. */
 #define CW_WORLD_BUFFERS(X)                                                                        \
-    X(cw_bvh4_node, nodes, "BVH nodes") /* the 4-wide BVH */                                       \
+    X(cw_bvhw_node, nodes, "BVH nodes") /* the wide BVH */                                         \
     X(int, refs, "BVH references")      /* BVH leaf entries: CW_REF(kind, index) */                \
     X(cw_sphere, spheres, "spheres")                                                               \
     X(cw_triangle, triangles, "triangles")                                                         \
-    X(cw_float4, normals, "vertex normals") /* of smooth triangles */                              \
+    X(cw_tri4, tri_blocks, "triangle blocks") /* the leaves of triangles only, 4 by 4 */           \
+    X(cw_float4, normals, "vertex normals")   /* of smooth triangles */                            \
     X(cw_polygon, polygons, "polygons")                                                            \
     X(cw_float4, poly_verts, "polygon vertices")                                                   \
     X(int, poly_bands, "polygon edge bands") /* of large polygons (cw_polygon) */                  \

@@ -1,19 +1,24 @@
 /* Tests for the BVH builder (host/bvh.c): the structural invariants of the flattened tree
  * on random and degenerate box sets, closest hits by a reference traversal against brute
- * force, SAH quality, and the figures of a one-million-triangle build (printed, not
- * asserted: timings are noisy). No OpenCL. */
+ * force, SAH quality, the wide tree and its blocks of four triangles (each block test
+ * against four single tests, run on the host), and the figures of a one-million-triangle build
+ * (printed, not asserted: timings are noisy). No OpenCL. */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "testutil.h"
 #include "sys.h"
 
 #include "bvh.h"
 #include "config.h"
+#include "devscene.h"
+#include "scene_load.h"
+#include "triangle.h"
 
 /* ======================================================================================== */
 /* Helpers                                                                                  */
@@ -890,34 +895,31 @@ static void test_threads_identical(void **state)
     free(b);
 }
 
-/* Lane i of a cw_float4. */
-static float lane(cw_float4 v, int i)
-{
-    return i == 0 ? v.x : (i == 1 ? v.y : (i == 2 ? v.z : v.w));
-}
-
-/* Walks the 4-wide tree from node k: every lane's box must equal the binary node it came
- * from (checked through containment of what lies below), every primitive must be reached
- * once, and the stack a traversal needs must stay within what bvh_collapse4 reports. */
-static int walk4(const bvh4 *q, const bvh *t, const bvh_box *boxes, int k, int *seen, int *reached)
+/* Walks the wide tree from node k: every lane's box must equal the binary node it came
+ * from (checked through containment of what lies below), an empty lane's box must be
+ * inverted (no ray enters it), every primitive must be reached once, and the stack a
+ * traversal needs must stay within what bvh_collapse_wide reports. */
+static int walk_wide(const bvhw *q, const bvh *t, const bvh_box *boxes, int k, int *seen,
+                     int *reached)
 {
     int i, need = 0, deepest = 0, interior = 0;
-    const cw_bvh4_node *nd = &q->nodes[k];
+    const cw_bvhw_node *nd = &q->nodes[k];
     assert_true(k >= 0 && k < q->num_nodes);
-    for (i = 0; i < 4; i++) {
-        int c = nd->count[i], j;
+    for (i = 0; i < CW_BVH_WIDTH; i++) {
+        int c = nd->count[i], j, a;
         float lo[3], hi[3];
-        if (c < 0)
+        for (a = 0; a < 3; a++) {
+            lo[a] = nd->bound[a].v[i];
+            hi[a] = nd->bound[3 + a].v[i];
+        }
+        if (c < 0) {
+            for (a = 0; a < 3; a++)
+                assert_true(lo[a] > hi[a]);
             continue;
-        lo[0] = lane(nd->lo_x, i);
-        lo[1] = lane(nd->lo_y, i);
-        lo[2] = lane(nd->lo_z, i);
-        hi[0] = lane(nd->hi_x, i);
-        hi[1] = lane(nd->hi_y, i);
-        hi[2] = lane(nd->hi_z, i);
+        }
         if (c > 0) {
             for (j = nd->child[i]; j < nd->child[i] + c; j++) {
-                int p = t->refs[j], a;
+                int p = t->refs[j];
                 assert_true(p >= 0 && p < t->num_refs);
                 seen[p]++;
                 (*reached)++;
@@ -927,26 +929,19 @@ static int walk4(const bvh4 *q, const bvh *t, const bvh_box *boxes, int k, int *
                 }
             }
         } else {
-            const cw_bvh4_node *ch = &q->nodes[nd->child[i]];
-            int l, a;
+            const cw_bvhw_node *ch = &q->nodes[nd->child[i]];
+            int l;
             assert_true(nd->child[i] > k); /* depth-first: children come later */
-            for (l = 0; l < 4; l++) {
-                float clo[3], chi[3];
+            for (l = 0; l < CW_BVH_WIDTH; l++) {
                 if (ch->count[l] < 0)
                     continue;
-                clo[0] = lane(ch->lo_x, l);
-                clo[1] = lane(ch->lo_y, l);
-                clo[2] = lane(ch->lo_z, l);
-                chi[0] = lane(ch->hi_x, l);
-                chi[1] = lane(ch->hi_y, l);
-                chi[2] = lane(ch->hi_z, l);
                 for (a = 0; a < 3; a++) {
-                    assert_true(clo[a] >= lo[a]);
-                    assert_true(chi[a] <= hi[a]);
+                    assert_true(ch->bound[a].v[l] >= lo[a]);
+                    assert_true(ch->bound[3 + a].v[l] <= hi[a]);
                 }
             }
             interior++;
-            need = walk4(q, t, boxes, nd->child[i], seen, reached);
+            need = walk_wide(q, t, boxes, nd->child[i], seen, reached);
             if (need > deepest)
                 deepest = need;
         }
@@ -954,7 +949,7 @@ static int walk4(const bvh4 *q, const bvh *t, const bvh_box *boxes, int k, int *
     return (interior > 1 ? interior - 1 : 0) + deepest;
 }
 
-static void test_collapse4(void **state)
+static void test_collapse_wide(void **state)
 {
     static const int sizes[] = {0, 1, 2, 5, 17, 1000, 100000};
     char err[256];
@@ -965,35 +960,249 @@ static void test_collapse4(void **state)
         bvh_box *boxes = random_boxes(n, 100 + (uint64_t)n, 100.0f, 1.0f);
         int *seen = calloc((size_t)n + 1, sizeof *seen);
         bvh t;
-        bvh4 q;
+        bvhw q;
         assert_non_null(seen);
         build_ok(&t, boxes, n, 4);
-        assert_int_equal(bvh_collapse4(&t, &q, err, sizeof err), 0);
+        assert_int_equal(bvh_collapse_wide(&t, &q, err, sizeof err), 0);
         if (n == 0) {
             assert_int_equal(q.num_nodes, 0);
         } else {
             assert_true(q.num_nodes >= 1 && q.num_nodes <= t.num_nodes);
-            need = walk4(&q, &t, boxes, 0, seen, &reached) + 1;
+            need = walk_wide(&q, &t, boxes, 0, seen, &reached) + 1;
             assert_int_equal(reached, n);
             for (i = 0; i < n; i++)
                 assert_int_equal(seen[i], 1);
             assert_int_equal(need, q.stack_need);
             assert_true(q.stack_need <= CW_BVH_STACK);
         }
-        printf("  4-wide: %d primitives, %d binary nodes -> %d 4-wide nodes, stack %d\n", n,
-               t.num_nodes, q.num_nodes, q.stack_need);
-        bvh4_free(&q);
+        printf("  %d-wide: %d primitives, %d binary nodes -> %d wide nodes, stack %d\n",
+               CW_BVH_WIDTH, n, t.num_nodes, q.num_nodes, q.stack_need);
+        bvhw_free(&q);
         bvh_free(&t);
         free(seen);
         free(boxes);
     }
 }
 
+/* ---- blocks of four triangles ------------------------------------------------------------ */
+
+static void tri4_lane(cw_float4 *v, int lane, float x)
+{
+    float *f = lane == 0 ? &v->x : lane == 1 ? &v->y : lane == 2 ? &v->z : &v->w;
+    *f = x;
+}
+
+static float tri4_get(const cw_float4 *v, int lane)
+{
+    return lane == 0 ? v->x : lane == 1 ? v->y : lane == 2 ? v->z : v->w;
+}
+
+/* A random triangle near the unit cube; now and then a degenerate one (two equal
+ * vertices, or three on a line) or one sharing an edge with the previous. */
+static void random_triangle(cw_triangle *t, const cw_triangle *prev)
+{
+    cw_float4 *p[3] = {&t->p0, &t->p1, &t->p2};
+    int kind = (int)(rnd() * 8.0f);
+    memset(t, 0, sizeof *t);
+    for (int k = 0; k < 3; k++) {
+        p[k]->x = rnd_range(-1.0f, 1.0f);
+        p[k]->y = rnd_range(-1.0f, 1.0f);
+        p[k]->z = rnd_range(-1.0f, 1.0f);
+    }
+    if (kind == 0)
+        t->p2 = t->p1;
+    if (kind == 1) {
+        t->p2.x = 2.0f * t->p1.x - t->p0.x;
+        t->p2.y = 2.0f * t->p1.y - t->p0.y;
+        t->p2.z = 2.0f * t->p1.z - t->p0.z;
+    }
+    if (kind == 2 && prev) { /* the edge p0-p1 shared, reversed */
+        t->p0 = prev->p1;
+        t->p1 = prev->p0;
+    }
+}
+
+/* isect_tri4 against isect_triangle on each lane in order (the first closest wins, skip
+ * and unused lanes left out): the same winner and the same t, u and v, bit for bit, for
+ * rays through the triangles, along their edges and past them. */
+static void test_tri4_matches_single(void **state)
+{
+    int rays = 0, hits = 0;
+    (void)state;
+    tu_rng_seed(77);
+    for (int trial = 0; trial < 4000; trial++) {
+        cw_triangle tri[4];
+        cw_tri4 b;
+        int used = 1 + (int)(rnd() * 4.0f);
+        memset(&b, 0, sizeof b);
+        for (int l = 0; l < 4; l++) {
+            random_triangle(&tri[l], l > 0 ? &tri[l - 1] : NULL);
+            if (l >= used) {
+                b.index[l] = -1;
+                continue;
+            }
+            const cw_float4 *p[3] = {&tri[l].p0, &tri[l].p1, &tri[l].p2};
+            for (int v = 0; v < 3; v++) {
+                tri4_lane(&b.v[3 * v], l, p[v]->x);
+                tri4_lane(&b.v[3 * v + 1], l, p[v]->y);
+                tri4_lane(&b.v[3 * v + 2], l, p[v]->z);
+            }
+            b.index[l] = 10 + l;
+        }
+        for (int r = 0; r < 16; r++) {
+            vec3 o = v3(rnd_range(-3.0f, 3.0f), rnd_range(-3.0f, 3.0f), rnd_range(-3.0f, 3.0f));
+            const cw_triangle *aim = &tri[(int)(rnd() * (float)used)];
+            float a = rnd(), c = rnd() * (1.0f - a);
+            vec3 target;
+            if (r % 4 == 0) /* on an edge */
+                c = 1.0f - a;
+            target = v3_add(v3_scale(v3_from4(aim->p0), 1.0f - a - c),
+                            v3_add(v3_scale(v3_from4(aim->p1), a), v3_scale(v3_from4(aim->p2), c)));
+            if (r % 8 == 7) /* past it */
+                target = v3_add(target, v3(2.0f, 0.0f, 0.0f));
+            vec3 d = v3_sub(target, o);
+            if (v3_len(d) == 0.0f)
+                continue;
+            d = v3_norm(d);
+            cw_rayinfo ri = isect_rayinfo(o, d);
+            float tmax = r % 5 == 0 ? rnd_range(0.5f, 4.0f) : CW_FAR;
+            int skip = r % 3 == 0 ? CW_REF(CW_PRIM_TRIANGLE, 10 + (int)(rnd() * 4.0f)) + 1 : 0;
+            float t1 = 0, u1 = 0, v1 = 0, best = tmax, t4 = 0, u4 = 0, v4v = 0;
+            int want = -1;
+            for (int l = 0; l < used; l++) {
+                float t, u, v;
+                if (CW_REF(CW_PRIM_TRIANGLE, 10 + l) + 1 == skip)
+                    continue;
+                if (isect_triangle(&tri[l], &ri, 0.0f, best, &t, &u, &v)) {
+                    best = t;
+                    t1 = t;
+                    u1 = u;
+                    v1 = v;
+                    want = l;
+                }
+            }
+            int got = isect_tri4(&b, &ri, 0.0f, tmax, skip, &t4, &u4, &v4v);
+            assert_int_equal(got, want);
+            if (want >= 0) {
+                assert_memory_equal(&t4, &t1, sizeof t1);
+                assert_memory_equal(&u4, &u1, sizeof u1);
+                assert_memory_equal(&v4v, &v1, sizeof v1);
+                hits++;
+            }
+            rays++;
+        }
+    }
+    printf("  %d rays against blocks of 1-4 triangles, %d hits: the same as one by one\n", rays,
+           hits);
+    assert_true(hits > rays / 4);
+}
+
+/* A scene of spheres, polygons and triangles (some leaves mixed, most not): every leaf of
+ * triangles only becomes blocks holding its triangles in reference order, every other leaf
+ * keeps its references, and every primitive is reached exactly once. */
+static void test_triangle_blocks(void **state)
+{
+    char dir[] = "/tmp/cw-test-blocks-XXXXXX", path[64], err[256];
+    int nprims, reached = 0, in_blocks = 0;
+    FILE *f;
+    scene s;
+    devscene ds;
+    int *seen;
+    (void)state;
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/blocks.nff", dir);
+    f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 32 32\n"
+               "b 0 0 0\nl 0 10 10\nf 1 0 0 0.5 0.5 30 0 1\n");
+    tu_rng_seed(5);
+    for (int k = 0; k < 3000; k++) {
+        float x = rnd_range(-5, 5), y = rnd_range(-5, 5), z = rnd_range(-5, 5);
+        if (k % 10 == 0)
+            fprintf(f, "s %g %g %g 0.05\n", x, y, z);
+        else if (k % 10 == 1)
+            fprintf(f, "p 4\n%g %g %g\n%g %g %g\n%g %g %g\n%g %g %g\n", x, y, z, x + 0.1, y, z,
+                    x + 0.1, y + 0.1, z, x, y + 0.1, z);
+        else
+            fprintf(f, "p 3\n%g %g %g\n%g %g %g\n%g %g %g\n", x, y, z, x + 0.1, y, z, x, y + 0.1,
+                    z + 0.05);
+    }
+    fclose(f);
+    scene_init(&s);
+    if (scene_load(path, &s, err, sizeof err) != 0)
+        fail_msg("%s", err);
+    unlink(path);
+    rmdir(dir);
+    assert_int_equal(scene_finish(&s, 0, 0, 0, err, sizeof err), 0);
+    memset(&ds, 0, sizeof ds);
+    assert_int_equal(devscene_convert(&s, &ds, err, sizeof err), 0);
+    assert_int_equal(devscene_build_bvh(&ds, err, sizeof err), 0);
+    nprims = ds.nsph + ds.ntri + ds.npg;
+    assert_int_equal(nprims, 3000);
+    seen = calloc((size_t)nprims, sizeof *seen);
+    assert_non_null(seen);
+    for (int n = 0; n < ds.tree_wide.num_nodes; n++) {
+        const cw_bvhw_node *nd = &ds.tree_wide.nodes[n];
+        for (int i = 0; i < CW_BVH_WIDTH; i++) {
+            int c = nd->count[i];
+            if (c > 0) {
+                int tris = 0;
+                for (int k = nd->child[i]; k < nd->child[i] + c; k++) {
+                    int ref = ds.refs[k], idx = CW_REF_INDEX(ref), kind = CW_REF_KIND(ref);
+                    tris += kind == CW_PRIM_TRIANGLE;
+                    seen[kind == CW_PRIM_SPHERE     ? idx
+                         : kind == CW_PRIM_TRIANGLE ? ds.nsph + idx
+                                                    : ds.nsph + ds.ntri + idx]++;
+                    reached++;
+                }
+                assert_true(tris < c); /* a leaf of triangles only would be blocks */
+            } else if (c < -1) {
+                int nb = -1 - c, lanes = 0;
+                assert_true(nd->child[i] >= 0 && nd->child[i] + nb <= ds.nblocks);
+                for (int bk = nd->child[i]; bk < nd->child[i] + nb; bk++)
+                    for (int l = 0; l < 4; l++) {
+                        int idx = ds.tri_blocks[bk].index[l];
+                        if (idx < 0) { /* only the last block has unused lanes, at its end */
+                            assert_int_equal(bk, nd->child[i] + nb - 1);
+                            continue;
+                        }
+                        assert_true(lanes == 4 * (bk - nd->child[i]) + l);
+                        assert_true(idx < ds.ntri);
+                        for (int v = 0; v < 3; v++) {
+                            const cw_float4 *p = v == 0   ? &ds.tri[idx].p0
+                                                 : v == 1 ? &ds.tri[idx].p1
+                                                          : &ds.tri[idx].p2;
+                            assert_true(tri4_get(&ds.tri_blocks[bk].v[3 * v], l) == p->x);
+                            assert_true(tri4_get(&ds.tri_blocks[bk].v[3 * v + 1], l) == p->y);
+                            assert_true(tri4_get(&ds.tri_blocks[bk].v[3 * v + 2], l) == p->z);
+                        }
+                        seen[ds.nsph + idx]++;
+                        reached++;
+                        lanes++;
+                        in_blocks++;
+                    }
+                assert_true(lanes > 4 * (nb - 1) && lanes <= 4 * nb);
+            }
+        }
+    }
+    assert_int_equal(reached, nprims);
+    for (int k = 0; k < nprims; k++)
+        assert_int_equal(seen[k], 1);
+    printf("  %d primitives: %d triangles, %d of them in %d blocks\n", nprims, ds.ntri, in_blocks,
+           ds.nblocks);
+    assert_true(in_blocks > ds.ntri / 2);
+    free(seen);
+    devscene_free(&ds);
+    scene_free(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_collapse4),
+        cmocka_unit_test(test_collapse_wide),
+        cmocka_unit_test(test_tri4_matches_single),
+        cmocka_unit_test(test_triangle_blocks),
         cmocka_unit_test(test_empty_and_tiny),
         cmocka_unit_test(test_random_invariants),
         cmocka_unit_test(test_degenerate_invariants),
