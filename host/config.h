@@ -47,6 +47,9 @@
 #define CW_BAND_BYTES ((size_t)64 << 20)
 #define CW_PIXEL_LAUNCH_PIXELS 65536
 
+/* The kernel cache (progcache.c) reads entries of at most this many bytes. */
+#define CW_PROGCACHE_MAX_BYTES (256LL << 20)
+
 /* The preview's default samples per pixel before it stops refining. */
 #define CW_PREVIEW_DEFAULT_SPP 16
 
