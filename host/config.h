@@ -22,7 +22,7 @@
 
 /* Scene files: bytes per file, magnitude of any number, vertices per polygon or patch. */
 #define CW_MAX_FILE_BYTES (1L << 30)
-#define CW_MAX_ABS 1e30
+#define CW_MAX_ABS 1e18
 #define CW_MAX_VERTS 10000000
 
 /* Image writing: at most CW_MAX_WRITE_THREADS threads (and no more than the online CPUs)

@@ -329,10 +329,12 @@ int sys_tmp_open(sys_tmpfile *t, const char *path, char *err, size_t errlen)
     memcpy(t->tmp + keep, TMP_SUFFIX, sizeof TMP_SUFFIX);
     t->fd = mkstemp(t->tmp);
     if (t->fd < 0) {
+        int e = errno;
         snprintf(err, errlen, "%s: cannot create temporary file %s: %s", path, t->tmp,
-                 strerror(errno));
+                 strerror(e));
         free(t->tmp);
         t->tmp = NULL;
+        errno = e;
         return -1;
     }
     t->slot = sig_register(t->tmp);
@@ -400,8 +402,10 @@ int sys_check_output(const char *path, char *err, size_t errlen)
         }
     }
     /* the folder takes a new file: create and remove the temporary file the write will use */
-    if (sys_tmp_open(&t, path, err, errlen) != 0)
+    if (sys_tmp_open(&t, path, err, errlen) != 0) {
+        snprintf(err, errlen, "%s: cannot write in folder %s: %s", path, dir, strerror(errno));
         return -1;
+    }
     sys_tmp_abort(&t);
     return 0;
 }
