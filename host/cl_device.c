@@ -63,8 +63,9 @@ const char *cldev_env_problem(char *buf, size_t n)
     else if (home && *home)
         snprintf(dir, sizeof dir, "%s/.cache/pocl", home);
     else {
-        snprintf(buf, n, "HOME is not set, so PoCL has no kernel cache folder (set "
-                         "POCL_CACHE_DIR to a writable folder)");
+        snprintf(buf, n,
+                 "HOME is not set, so PoCL has no kernel cache folder (set "
+                 "POCL_CACHE_DIR to a writable folder)");
         return buf;
     }
     if (!dir_writable(dir)) {

@@ -284,7 +284,8 @@ int cli_parse(int argc, char **argv, cli_options *o, int *status)
     }
     if (o->width > 0 && o->height > 0 && (long long)o->width * o->height > CW_MAX_PIXELS) {
         fprintf(stderr,
-                "clwhitted: -W %d -H %d is %lld pixels; an image may have at most %ld (2^28)\n" CLI_HINT,
+                "clwhitted: -W %d -H %d is %lld pixels; an image may have at most %ld "
+                "(2^28)\n" CLI_HINT,
                 o->width, o->height, (long long)o->width * o->height, (long)CW_MAX_PIXELS);
         return CLI_EXIT;
     }

@@ -172,9 +172,9 @@ static void report(const cli_options *o, const scene *s, const renderer *r, cons
     if (!o->quiet)
         printf("clwhitted: wrote %s (%dx%d, depth %d) in %.3f s on %s: load %.3f s, setup %.3f s, "
                "render %.3f s, %s Mrays/s\n",
-               sys_escape(shown, sizeof shown, output), s->width, s->height, s->max_depth, t->written - t->start,
-               renderer_device_name(r), t->loaded - t->start, t->set_up - t->loaded,
-               t->rendered - t->set_up, rate);
+               sys_escape(shown, sizeof shown, output), s->width, s->height, s->max_depth,
+               t->written - t->start, renderer_device_name(r), t->loaded - t->start,
+               t->set_up - t->loaded, t->rendered - t->set_up, rate);
     if (o->settings.stats) {
         printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu "
                "(hit %llu)\n",

@@ -272,8 +272,7 @@ static void warn_entry(const char *path, const char *why)
             shown, why);
 }
 
-cl_program progcache_load(cl_context ctx, cl_device_id dev, const char *source,
-                          const char *options)
+cl_program progcache_load(cl_context ctx, cl_device_id dev, const char *source, const char *options)
 {
     char dir[1024], path[1100], why[160];
     unsigned char *file = NULL;

@@ -86,21 +86,21 @@ int renderer_check_memory(const renderer *r, int width, int height, char *err, s
     if (clGetDeviceInfo(r->device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof global, &global, NULL) !=
         CL_SUCCESS)
         global = 0;
-    if (clGetDeviceInfo(r->device, CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof unified, &unified,
-                        NULL) != CL_SUCCESS)
+    if (clGetDeviceInfo(r->device, CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof unified, &unified, NULL) !=
+        CL_SUCCESS)
         unified = CL_FALSE;
     if (accum > r->max_alloc) {
         snprintf(err, errlen,
                  "a %dx%d image needs a %.1f GiB accumulation buffer (%zu bytes per pixel); "
                  "device %s allocates at most %.1f GiB at once: %s",
-                 width, height, gib(accum), MEM_DEVICE_PER_PIXEL, r->device_name,
-                 gib(r->max_alloc), fix);
+                 width, height, gib(accum), MEM_DEVICE_PER_PIXEL, r->device_name, gib(r->max_alloc),
+                 fix);
         return -1;
     }
     if (global > 0 && device > global) {
         snprintf(err, errlen,
-                 "a %dx%d image needs %.1f GiB of device memory; device %s has %.1f GiB: %s",
-                 width, height, gib(device), r->device_name, gib(global), fix);
+                 "a %dx%d image needs %.1f GiB of device memory; device %s has %.1f GiB: %s", width,
+                 height, gib(device), r->device_name, gib(global), fix);
         return -1;
     }
     if (unified)

@@ -18,7 +18,7 @@
  *               {"type": "triangle", "vertices": 3 points, "normals" (optional), "material"},
  *               {"type": "polygon", "vertices": >= 3 planar points, "material"}] }
  *
- * A colour c is [r,g,b] or one number (grey). Numbers must be finite, magnitude <= 1e30
+ * A colour c is [r,g,b] or one number (grey). Numbers must be finite, magnitude <= 1e18
  * (CW_MAX_ABS); an image side at most 65536 (CW_MAX_SIDE), a depth at most 64 (CW_MAX_DEPTH).
  *
  * cJSON keeps no line numbers. A syntax error's line comes from the parse end; a schema

@@ -172,7 +172,8 @@ static pthread_mutex_t sig_lock = PTHREAD_MUTEX_INITIALIZER;
 
 static void on_fatal_signal(int sig)
 {
-    static const char spaces[64] = "                                                               ";
+    static const char spaces[64] =
+        "                                                               ";
     int i, fd = sig_line_fd;
     for (i = 0; i < SIG_SLOTS; i++)
         if (sig_used[i])
@@ -330,8 +331,7 @@ int sys_tmp_open(sys_tmpfile *t, const char *path, char *err, size_t errlen)
     t->fd = mkstemp(t->tmp);
     if (t->fd < 0) {
         int e = errno;
-        snprintf(err, errlen, "%s: cannot create temporary file %s: %s", path, t->tmp,
-                 strerror(e));
+        snprintf(err, errlen, "%s: cannot create temporary file %s: %s", path, t->tmp, strerror(e));
         free(t->tmp);
         t->tmp = NULL;
         errno = e;
@@ -395,8 +395,9 @@ int sys_check_output(const char *path, char *err, size_t errlen)
             return -1;
         }
         if (!(st.st_mode & S_IWUSR)) {
-            snprintf(err, errlen, "%s: the file is read-only (not replaced; chmod u+w it or "
-                                  "choose another name)",
+            snprintf(err, errlen,
+                     "%s: the file is read-only (not replaced; chmod u+w it or "
+                     "choose another name)",
                      path);
             return -1;
         }
