@@ -93,6 +93,7 @@ test: $(BUILD)/clwhitted $(TEST_BIN)
 	    echo "== $$t"; $$t || fail=1; \
 	done; \
 	sh tests/cli.sh $(BUILD)/clwhitted || fail=1; \
+	sh tests/safety.sh $(BUILD) || fail=1; \
 	sh tests/build.sh $(BUILD) || fail=1; \
 	sh tests/install.sh || fail=1; \
 	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \
@@ -197,7 +198,7 @@ QUALITY_SCENES ?= ../shared/scenes/spd/tetra.nff ../shared/scenes/spd/balls.nff 
 QUALITY_ARGS   ?=
 .PHONY: quality
 all: $(BUILD)/imgtool
-test: $(BUILD)/imgtool
+test: $(BUILD)/imgtool $(BUILD)/imgcmp
 
 $(BUILD)/imgtool: tools/imgtool.c $(LIB) | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -o $@

@@ -4,11 +4,90 @@
  * `clinfo -l` with the facts that matter for rendering); OpenCL error names. */
 #include "cl_device.h"
 
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "sys.h"
 
 #define NO_PLATFORM_HINT "(install pocl-opencl-icd: sh tools/install-deps)"
+
+/* Whether a folder can be written, or created where it is missing: a folder made (and
+ * removed) in it, else in its nearest existing parent, says so for any user, root
+ * included, and for read-only file systems. */
+static int dir_writable(const char *dir)
+{
+    char buf[1024], probe[1100];
+    struct stat st;
+    char *slash;
+    if (snprintf(buf, sizeof buf, "%s", dir) >= (int)sizeof buf)
+        return 1; /* cannot tell: no claim */
+    for (;;) {
+        if (stat(buf, &st) == 0) {
+            if (!S_ISDIR(st.st_mode))
+                return 0;
+            snprintf(probe, sizeof probe, "%s/.clwhitted-probe-XXXXXX", buf);
+            if (!mkdtemp(probe))
+                return 0;
+            (void)rmdir(probe);
+            return 1;
+        }
+        if (errno != ENOENT || !(slash = strrchr(buf, '/')))
+            return errno == ENOENT; /* a relative name: the current folder decides later */
+        if (slash == buf)
+            slash[1] = '\0';
+        else
+            *slash = '\0';
+    }
+}
+
+const char *cldev_env_problem(char *buf, size_t n)
+{
+    const char *devs = getenv("POCL_DEVICES"), *cache = getenv("POCL_CACHE_DIR");
+    const char *xdg = getenv("XDG_CACHE_HOME"), *home = getenv("HOME");
+    char dir[1024], shown[512];
+    if (devs && *devs) {
+        snprintf(buf, n,
+                 "POCL_DEVICES='%s' may hide every PoCL device (unset it, or name a device type "
+                 "PoCL has, such as cpu)",
+                 sys_escape(shown, sizeof shown, devs));
+        return buf;
+    }
+    if (cache && *cache)
+        snprintf(dir, sizeof dir, "%s", cache);
+    else if (xdg && *xdg)
+        snprintf(dir, sizeof dir, "%s/pocl", xdg);
+    else if (home && *home)
+        snprintf(dir, sizeof dir, "%s/.cache/pocl", home);
+    else {
+        snprintf(buf, n,
+                 "HOME is not set, so PoCL has no kernel cache folder (set "
+                 "POCL_CACHE_DIR to a writable folder)");
+        return buf;
+    }
+    if (!dir_writable(dir)) {
+        snprintf(buf, n,
+                 "PoCL cannot write its kernel cache folder %s (set POCL_CACHE_DIR to a writable "
+                 "folder)",
+                 sys_escape(shown, sizeof shown, dir));
+        return buf;
+    }
+    return NULL;
+}
+
+/* "no OpenCL WHAT found", with the environment's problem when there is one, else the
+ * install hint. */
+static void none_found(const char *what, char *err, size_t errlen)
+{
+    char why[1024];
+    if (cldev_env_problem(why, sizeof why))
+        snprintf(err, errlen, "no OpenCL %s found: %s", what, why);
+    else
+        snprintf(err, errlen, "no OpenCL %s found " NO_PLATFORM_HINT, what);
+}
 
 int cldev_fail(cl_int e, const char *call, const char *device, char *err, size_t errlen)
 {
@@ -27,7 +106,7 @@ int cldev_platforms(cl_platform_id **out, cl_uint *count, char *err, size_t errl
     *out = NULL;
     *count = 0;
     if (e == -1001 /* CL_PLATFORM_NOT_FOUND_KHR */ || (e == CL_SUCCESS && n == 0)) {
-        snprintf(err, errlen, "no OpenCL platform found " NO_PLATFORM_HINT);
+        none_found("platform", err, errlen);
         return 1;
     }
     if (e != CL_SUCCESS)
@@ -133,7 +212,7 @@ int cldev_find(const char *spec, cl_device_id *out, char *err, size_t errlen)
         if (spec && *spec)
             snprintf(err, errlen, "no OpenCL device matches '%s' (see --list-devices)", spec);
         else
-            snprintf(err, errlen, "no OpenCL device found " NO_PLATFORM_HINT);
+            none_found("device", err, errlen);
         goto out_free_platforms;
     }
     rc = 0;

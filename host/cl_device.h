@@ -22,6 +22,11 @@ int cldev_platforms(cl_platform_id **out, cl_uint *count, char *err, size_t errl
  * when there is none (not an error). Returns 0, or -1 with err. */
 int cldev_devices(cl_platform_id p, cl_device_id **out, cl_uint *count, char *err, size_t errlen);
 
+/* What in the environment keeps PoCL from working, in buf ("POCL_DEVICES='x' may hide
+ * every PoCL device ...", "PoCL cannot write its kernel cache folder ..."), or NULL when
+ * nothing is seen: for the messages of a missing device or an empty build log. */
+const char *cldev_env_problem(char *buf, size_t n);
+
 /* The device named by spec: NULL or "" for the first CPU device (else the first device),
  * "P:D" for platform P device D, or else a substring of the device name. Returns 0, or
  * -1 with err. */

@@ -9,6 +9,7 @@
 
 #include "cli_num.h"
 #include "config.h"
+#include "sys.h"
 #include "version.h"
 
 #define STR_(x) #x
@@ -103,12 +104,19 @@ static void version(void)
            image_library_versions());
 }
 
+/* An argument as messages show it (control characters escaped). */
+static const char *shown(const char *arg)
+{
+    static char buf[256];
+    return sys_escape(buf, sizeof buf, arg);
+}
+
 static int parse_int(const char *opt, const char *s, int lo, int hi, int *out)
 {
     long v;
     if (cli_parse_long(s, lo, hi, &v) != 0) {
         fprintf(stderr, "clwhitted: %s expects an integer in %d..%d, got '%s'\n" CLI_HINT, opt, lo,
-                hi, s);
+                hi, shown(s));
         return -1;
     }
     *out = (int)v;
@@ -119,7 +127,7 @@ static int parse_double(const char *opt, const char *s, double lo, double hi, do
 {
     if (cli_parse_double(s, lo, hi, out) != 0) {
         fprintf(stderr, "clwhitted: %s expects a number in %g..%g, got '%s'\n" CLI_HINT, opt, lo,
-                hi, s);
+                hi, shown(s));
         return -1;
     }
     return 0;
@@ -188,7 +196,8 @@ static int parse_option(int c, const char *arg, cli_options *o)
             o->settings.precision = RENDER_FAST;
         else {
             fprintf(stderr,
-                    "clwhitted: --precision expects 'robust' or 'fast', got '%s'\n" CLI_HINT, arg);
+                    "clwhitted: --precision expects 'robust' or 'fast', got '%s'\n" CLI_HINT,
+                    shown(arg));
             return -1;
         }
         return 0;
@@ -201,7 +210,7 @@ static int parse_option(int c, const char *arg, cli_options *o)
             fprintf(
                 stderr,
                 "clwhitted: --kernel expects 'auto', 'pixel' or 'wavefront', got '%s'\n" CLI_HINT,
-                arg);
+                shown(arg));
             return -1;
         }
         return 0;
@@ -217,7 +226,7 @@ static int parse_option(int c, const char *arg, cli_options *o)
             fprintf(
                 stderr,
                 "clwhitted: --tonemap expects 'clamp', 'reinhard' or 'aces', got '%s'\n" CLI_HINT,
-                arg);
+                shown(arg));
             return -1;
         }
         return 0;
@@ -270,7 +279,14 @@ int cli_parse(int argc, char **argv, cli_options *o, int *status)
     if (o->list_devices)
         return CLI_RUN;
     if (o->output && image_check_path(o->output, err, sizeof err) != 0) {
-        fprintf(stderr, "clwhitted: %s\n" CLI_HINT, err);
+        fprintf(stderr, "clwhitted: %s\n" CLI_HINT, shown(err));
+        return CLI_EXIT;
+    }
+    if (o->width > 0 && o->height > 0 && (long long)o->width * o->height > CW_MAX_PIXELS) {
+        fprintf(stderr,
+                "clwhitted: -W %d -H %d is %lld pixels; an image may have at most %ld "
+                "(2^28)\n" CLI_HINT,
+                o->width, o->height, (long long)o->width * o->height, (long)CW_MAX_PIXELS);
         return CLI_EXIT;
     }
     if (optind != argc - 1) {

@@ -22,7 +22,7 @@
 
 /* Scene files: bytes per file, magnitude of any number, vertices per polygon or patch. */
 #define CW_MAX_FILE_BYTES (1L << 30)
-#define CW_MAX_ABS 1e30
+#define CW_MAX_ABS 1e18
 #define CW_MAX_VERTS 10000000
 
 /* Image writing: at most CW_MAX_WRITE_THREADS threads (and no more than the online CPUs)
@@ -46,6 +46,9 @@
  * CW_PIXEL_LAUNCH_PIXELS pixels, each followed by the counters' read and a progress report. */
 #define CW_BAND_BYTES ((size_t)64 << 20)
 #define CW_PIXEL_LAUNCH_PIXELS 65536
+
+/* The kernel cache (progcache.c) reads entries of at most this many bytes. */
+#define CW_PROGCACHE_MAX_BYTES (256LL << 20)
 
 /* The preview's default samples per pixel before it stops refining. */
 #define CW_PREVIEW_DEFAULT_SPP 16

@@ -371,11 +371,13 @@ int image_png_write(const image *img, const char *path, const image_write_opts *
         return -1;
     }
     memset(&e, 0, sizeof e);
+    errno = 0;
     rc = png_write_head(fp, img->width, img->height, &meta, &e);
-    if (rc != 0)
-        image_set_err(err, errlen, "%s: PNG encoding failed: %s", path,
-                      e.msg[0] ? e.msg : "libpng error");
-    else
+    if (rc != 0) {
+        int why = ferror(fp) ? (errno ? errno : EIO) : 0; /* libpng says only "Write Error" */
+        image_set_err(err, errlen, "%s: PNG encoding failed: %s%s%s", path,
+                      e.msg[0] ? e.msg : "libpng error", why ? ": " : "", why ? strerror(why) : "");
+    } else
         rc = png_write_pixels(img, o, fp, path, t.tmp, err, errlen);
     werr = 0;
     if (rc == 0 && fflush(fp) != 0)

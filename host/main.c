@@ -2,6 +2,7 @@
  * then either opens the preview (preview.c) or renders once and writes the image. A batch
  * render loads the scene on a second thread while OpenCL starts (platform, device,
  * context, queue), and a successful one ends without tearing anything down. */
+#include <errno.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,22 +95,44 @@ static int scene_job_end(scene_job *j)
     return j->rc;
 }
 
-/* Prints an error, clearing the progress line first. */
+/* Prints an error (control characters escaped: messages quote paths and other untrusted
+ * text), clearing the progress line first. */
 static void fail_msg(progress_bar *bar, const char *msg)
 {
+    char shown[4096];
     progress_clear(bar);
-    fprintf(stderr, "clwhitted: %s\n", msg);
+    fprintf(stderr, "clwhitted: %s\n", sys_escape(shown, sizeof shown, msg));
 }
 
-/* "dir/name.nff" -> "name.exr" in the current folder. */
-static char *default_output(const scene *s)
+/* "dir/name.nff" -> "name.exr" in the current folder (the name as scene_set_name makes
+ * it from the scene's path). */
+static char *default_output(const char *scene_path)
 {
-    const char *name = s->name && *s->name ? s->name : "render";
-    size_t n = strlen(name) + 5;
-    char *out = malloc(n);
-    if (out)
-        snprintf(out, n, "%s.exr", name);
+    scene tmp;
+    char *out = NULL;
+    size_t n;
+    scene_init(&tmp);
+    if (scene_set_name(&tmp, scene_path) == 0) {
+        n = strlen(tmp.name) + 5;
+        out = malloc(n);
+        if (out)
+            snprintf(out, n, "%s.exr", tmp.name);
+    }
+    scene_free(&tmp);
     return out;
+}
+
+/* The summary on stdout reached it: fails on a write error other than a closed pipe
+ * (whose reader no longer wants it). Returns the exit status. */
+static int summary_written(void)
+{
+    if (fflush(stdout) == 0 && !ferror(stdout))
+        return 0;
+    if (errno == EPIPE)
+        return 0;
+    fprintf(stderr, "clwhitted: cannot write the summary to the standard output: %s\n",
+            strerror(errno));
+    return 1;
 }
 
 /* The metadata of the image: title (the scene file's base name), software, device, the
@@ -144,14 +167,14 @@ static void report(const cli_options *o, const scene *s, const renderer *r, cons
                    const batch_times *t, const render_stats *st, double trace_s)
 {
     unsigned long long rays = st->eye_rays + st->secondary_rays + st->shadow_rays;
-    char rate[32];
+    char rate[32], shown[1024];
     progress_format_rate(rate, sizeof rate, trace_s > 0 ? (double)rays / trace_s * 1e-6 : 0.0);
     if (!o->quiet)
         printf("clwhitted: wrote %s (%dx%d, depth %d) in %.3f s on %s: load %.3f s, setup %.3f s, "
                "render %.3f s, %s Mrays/s\n",
-               output, s->width, s->height, s->max_depth, t->written - t->start,
-               renderer_device_name(r), t->loaded - t->start, t->set_up - t->loaded,
-               t->rendered - t->set_up, rate);
+               sys_escape(shown, sizeof shown, output), s->width, s->height, s->max_depth,
+               t->written - t->start, renderer_device_name(r), t->loaded - t->start,
+               t->set_up - t->loaded, t->rendered - t->set_up, rate);
     if (o->settings.stats) {
         printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu "
                "(hit %llu)\n",
@@ -186,17 +209,13 @@ typedef struct {
 static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times *t)
 {
     char err[2048], title[256], software[64], settings[256];
-    const char *output = o->output;
+    const char *output = o->output ? o->output : b->default_out;
     const scene *s = &b->s;
     renderer *r;
     render_stats st;
     double trace_s;
     int is_exr;
 
-    if (!output && !(output = b->default_out = default_output(s))) {
-        fprintf(stderr, "clwhitted: out of memory\n");
-        return 1;
-    }
     is_exr = sys_has_ext(output, ".exr");
     if (!o->quiet) {
         if (is_exr && (o->write.exposure != 0 || o->write.tonemap != IMAGE_TONEMAP_CLAMP))
@@ -211,7 +230,8 @@ static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times
         return 1;
     }
     r = b->r;
-    if (renderer_set_scene(r, s, err, sizeof err) != 0) {
+    if (renderer_check_memory(r, s->width, s->height, err, sizeof err) != 0 ||
+        renderer_set_scene(r, s, err, sizeof err) != 0) {
         fail_msg(bar, err);
         return 1;
     }
@@ -230,12 +250,12 @@ static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times
     set_metadata(o, s, r, is_exr, trace_s, &o->write, title, sizeof title, software,
                  sizeof software, settings, sizeof settings);
     if (image_write_ex(&b->img, output, &o->write, err, sizeof err) != 0) {
-        fprintf(stderr, "clwhitted: %s\n", err);
+        fail_msg(bar, err);
         return 1;
     }
     t->written = sys_now();
     report(o, s, r, output, t, &st, trace_s);
-    return 0;
+    return summary_written();
 }
 
 /* Loads the scene while OpenCL starts, renders it, and ends the process (see
@@ -243,12 +263,23 @@ static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times
  * device's. Returns the exit status. */
 static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
 {
+    char err[2048];
     scene_job load;
     batch b;
     int rc = 1;
 
     memset(&b, 0, sizeof b);
     scene_init(&b.s);
+    /* the output's place first: a render that cannot be saved is not started */
+    if (!o->output && !(b.default_out = default_output(o->scene))) {
+        fail_msg(bar, "out of memory");
+        return 1;
+    }
+    if (sys_check_output(o->output ? o->output : b.default_out, err, sizeof err) != 0) {
+        fail_msg(bar, err);
+        free(b.default_out);
+        return 1;
+    }
     progress_status(bar, "loading the scene ...");
     scene_job_begin(&load, o, &b.s);
     if (load.threaded || load.rc == 0) /* without a thread, a failed load ends it here */
@@ -297,19 +328,20 @@ static int run_preview(const cli_options *o, progress_bar *bar)
 int main(int argc, char **argv)
 {
     cli_options o;
-    char err[2048];
+    char err[2048], shown[2048];
     progress_bar bar;
     batch_times t;
     int rc;
 
     if (cli_parse(argc, argv, &o, &rc) != CLI_RUN)
         return rc;
+    sys_signals_install();
     if (o.list_devices) {
         if (renderer_list_devices(err, sizeof err) != 0) {
-            fprintf(stderr, "clwhitted: %s\n", err);
+            fprintf(stderr, "clwhitted: %s\n", sys_escape(shown, sizeof shown, err));
             return 1;
         }
-        return 0;
+        return summary_written();
     }
     progress_init(&bar, stderr,
                   progress_wanted(o.quiet, getenv("CLWHITTED_PROGRESS"), isatty(STDERR_FILENO)));

@@ -581,8 +581,10 @@ int preview_run(scene *s, const preview_options *o)
         print_summary(p);
     rc = 0;
 free_all: /* the renderer, the window, the script, the display and the state */
-    if (rc)
-        fprintf(stderr, "clwhitted: %s\n", p->err);
+    if (rc) {
+        char shown[sizeof p->err];
+        fprintf(stderr, "clwhitted: %s\n", sys_escape(shown, sizeof shown, p->err));
+    }
     renderer_destroy(p->r);
     pvg_close(&p->win);
     pvs_close(&p->script.s);

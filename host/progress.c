@@ -57,6 +57,7 @@ static void draw(progress_bar *p, const char *text)
         fprintf(p->out, "%*s\r%s", (int)(p->drawn - len), "", text);
     fflush(p->out);
     p->drawn = len;
+    sys_signal_line(fileno(p->out), len);
 }
 
 void progress_status(progress_bar *p, const char *msg)
@@ -166,4 +167,5 @@ void progress_clear(progress_bar *p)
     fprintf(p->out, "\r%*s\r", (int)p->drawn, "");
     fflush(p->out);
     p->drawn = 0;
+    sys_signal_line(-1, 0);
 }

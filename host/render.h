@@ -24,6 +24,12 @@ const char *renderer_device_name(const renderer *r);
 /* Uploads a finished scene (see scene_finish) and builds the kernels for its features. */
 int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen);
 
+/* Whether a width x height render fits: the accumulation image within the device's largest
+ * allocation, the device's buffers within its memory, and the host's (with the device's on
+ * a device sharing the host's memory) within the memory available now. Call before the
+ * work. Returns 0, or -1 with what was asked, what is available and how to reduce it. */
+int renderer_check_memory(const renderer *r, int width, int height, char *err, size_t errlen);
+
 /* Quality and mode settings. Set them before renderer_set_scene (they can change the
  * kernel build); changing them later rebuilds on the next render. */
 #define RENDER_ROBUST 0 /* watertight, error-bounded intersection and ray offsets */

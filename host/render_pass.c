@@ -65,6 +65,58 @@ int rpass_check_alloc(const renderer *r, const char *what, size_t bytes, char *e
     return 0;
 }
 
+/* Bytes per pixel of a render: on the device the accumulation image (rgb + count floats);
+ * on the host its read back and the image's rgb floats. */
+#define MEM_DEVICE_PER_PIXEL (4 * sizeof(cl_float))
+#define MEM_HOST_PER_PIXEL (4 * sizeof(float) + 3 * sizeof(float))
+
+static double gib(unsigned long long b)
+{
+    return (double)b / (1024.0 * 1024.0 * 1024.0);
+}
+
+int renderer_check_memory(const renderer *r, int width, int height, char *err, size_t errlen)
+{
+    unsigned long long px = (unsigned long long)(width + 1) * (unsigned long long)(height + 1);
+    unsigned long long accum = px * MEM_DEVICE_PER_PIXEL, device = accum + CW_BAND_BYTES;
+    unsigned long long host = px * MEM_HOST_PER_PIXEL, avail = sys_mem_available();
+    cl_ulong global = 0;
+    cl_bool unified = CL_FALSE;
+    const char *fix = "reduce -W/-H (each halving of both needs a quarter)";
+    if (clGetDeviceInfo(r->device, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof global, &global, NULL) !=
+        CL_SUCCESS)
+        global = 0;
+    if (clGetDeviceInfo(r->device, CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof unified, &unified, NULL) !=
+        CL_SUCCESS)
+        unified = CL_FALSE;
+    if (accum > r->max_alloc) {
+        snprintf(err, errlen,
+                 "a %dx%d image needs a %.1f GiB accumulation buffer (%zu bytes per pixel); "
+                 "device %s allocates at most %.1f GiB at once: %s",
+                 width, height, gib(accum), MEM_DEVICE_PER_PIXEL, r->device_name, gib(r->max_alloc),
+                 fix);
+        return -1;
+    }
+    if (global > 0 && device > global) {
+        snprintf(err, errlen,
+                 "a %dx%d image needs %.1f GiB of device memory; device %s has %.1f GiB: %s", width,
+                 height, gib(device), r->device_name, gib(global), fix);
+        return -1;
+    }
+    if (unified)
+        host += device; /* the device's memory is the host's */
+    if (avail > 0 && host > avail) {
+        snprintf(err, errlen,
+                 "a %dx%d image needs about %.1f GiB of memory (%zu bytes per pixel%s); %.1f GiB "
+                 "is available: %s",
+                 width, height, gib(host),
+                 MEM_HOST_PER_PIXEL + (unified ? MEM_DEVICE_PER_PIXEL : 0),
+                 unified ? ", host and device" : " on the host", gib(avail), fix);
+        return -1;
+    }
+    return 0;
+}
+
 void rpass_release(cl_mem *m)
 {
     if (*m)

@@ -18,7 +18,7 @@
  *               {"type": "triangle", "vertices": 3 points, "normals" (optional), "material"},
  *               {"type": "polygon", "vertices": >= 3 planar points, "material"}] }
  *
- * A colour c is [r,g,b] or one number (grey). Numbers must be finite, magnitude <= 1e30
+ * A colour c is [r,g,b] or one number (grey). Numbers must be finite, magnitude <= 1e18
  * (CW_MAX_ABS); an image side at most 65536 (CW_MAX_SIDE), a depth at most 64 (CW_MAX_DEPTH).
  *
  * cJSON keeps no line numbers. A syntax error's line comes from the parse end; a schema
@@ -514,6 +514,27 @@ static int read_scene(jreader *r, const cJSON *root)
     return 0;
 }
 
+/* The deepest nesting of arrays and objects in text before `end` (strings skipped), to tell
+ * cJSON's nesting limit from a syntax error. */
+static long deepest_nesting(const char *text, const char *end)
+{
+    long depth = 0, deepest = 0;
+    const char *p;
+    for (p = text; p < end; p++) {
+        if (*p == '"') {
+            for (p++; p < end && *p != '"'; p++)
+                if (*p == '\\' && p + 1 < end)
+                    p++;
+        } else if (*p == '[' || *p == '{') {
+            if (++depth > deepest)
+                deepest = depth;
+        } else if (*p == ']' || *p == '}') {
+            depth--;
+        }
+    }
+    return deepest;
+}
+
 /* ---- entry points -------------------------------------------------------------------------- */
 
 /* A scene_text_parser: parses buf[0..len). */
@@ -545,6 +566,10 @@ static int parse_buffer(char *buf, size_t len, const scene_msg *msg, scene *s)
             k++;
         }
         near[k] = '\0';
+        if (deepest_nesting(buf, at < buf + len ? at + 1 : at) > CJSON_NESTING_LIMIT)
+            return scene_fail(msg, scene_line_at(buf, at),
+                              "JSON nested deeper than %d levels (arrays and objects)",
+                              (int)CJSON_NESTING_LIMIT);
         if (k == 0)
             return scene_fail(msg, scene_line_at(buf, at),
                               "JSON syntax error at the end of the line or file (unclosed value?)");

@@ -5,9 +5,13 @@
 #include "sys.h"
 
 #include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <pthread.h>
 #if defined(__linux__)
 #include <sched.h>
 #endif
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -33,6 +37,29 @@ int sys_cpu_count(void)
 #endif
     n = sysconf(_SC_NPROCESSORS_ONLN);
     return n < 1 ? 1 : n > 4096 ? 4096 : (int)n;
+}
+
+unsigned long long sys_mem_available(void)
+{
+    char line[256];
+    unsigned long long kb = 0;
+    long pages, size;
+    FILE *f = fopen("/proc/meminfo", "r");
+    if (f) {
+        while (fgets(line, sizeof line, f))
+            if (sscanf(line, "MemAvailable: %llu kB", &kb) == 1)
+                break;
+        fclose(f);
+        if (kb > 0)
+            return kb * 1024ULL;
+    }
+#ifdef _SC_AVPHYS_PAGES
+    pages = sysconf(_SC_AVPHYS_PAGES);
+#else
+    pages = -1;
+#endif
+    size = sysconf(_SC_PAGESIZE);
+    return pages > 0 && size > 0 ? (unsigned long long)pages * (unsigned long long)size : 0;
 }
 
 void sys_exit_now(int status)
@@ -131,30 +158,256 @@ int sys_read_file(const char *path, size_t max_bytes, int stop_at_nul, const cha
     return 0;
 }
 
+/* ---- signals ---------------------------------------------------------------------- */
+
+/* The temporary files that exist now, for the signal handler to remove, and the progress
+ * line on the terminal, for it to clear. A slot is filled before it is marked used, and the
+ * handler only reads: it unlinks, writes and ends the process (async-signal-safe calls). */
+#define SIG_SLOTS 8
+#define SIG_PATH 4096
+static char sig_tmp[SIG_SLOTS][SIG_PATH];
+static volatile sig_atomic_t sig_used[SIG_SLOTS];
+static volatile sig_atomic_t sig_line_fd = -1, sig_line_len;
+static pthread_mutex_t sig_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static void on_fatal_signal(int sig)
+{
+    static const char spaces[64] =
+        "                                                               ";
+    int i, fd = sig_line_fd;
+    for (i = 0; i < SIG_SLOTS; i++)
+        if (sig_used[i])
+            (void)unlink(sig_tmp[i]);
+    if (fd >= 0 && sig_line_len > 0) {
+        long left = sig_line_len;
+        ssize_t w = write(fd, "\r", 1);
+        while (left > 0 && w > 0) {
+            w = write(fd, spaces, left > 63 ? 63 : (size_t)left);
+            left -= 63;
+        }
+        w = write(fd, "\r", 1);
+        (void)w;
+    }
+    _exit(128 + sig);
+}
+
+void sys_signals_install(void)
+{
+    static const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+    struct sigaction sa, old;
+    size_t i;
+    memset(&sa, 0, sizeof sa);
+    sigemptyset(&sa.sa_mask);
+    for (i = 0; i < sizeof sigs / sizeof sigs[0]; i++)
+        (void)sigaddset(&sa.sa_mask, sigs[i]);
+    for (i = 0; i < sizeof sigs / sizeof sigs[0]; i++) {
+        /* a signal ignored by whoever started us (nohup) stays ignored */
+        if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler == SIG_IGN)
+            continue;
+        sa.sa_handler = on_fatal_signal;
+        (void)sigaction(sigs[i], &sa, NULL);
+    }
+    /* A closed stdout is an EPIPE from the write, handled where the write is. */
+    sa.sa_handler = SIG_IGN;
+    (void)sigaction(SIGPIPE, &sa, NULL);
+}
+
+void sys_signal_line(int fd, size_t len)
+{
+    sig_line_fd = -1;
+    sig_line_len = (sig_atomic_t)(len > 4096 ? 4096 : len);
+    sig_line_fd = len > 0 ? fd : -1;
+}
+
+/* Registers a temporary file for removal on a signal. Returns its slot, or -1 (no room,
+ * or a path too long: the file is then only removed by the normal paths). */
+static int sig_register(const char *tmp)
+{
+    int i, slot = -1;
+    size_t n = strlen(tmp);
+    if (n >= SIG_PATH)
+        return -1;
+    pthread_mutex_lock(&sig_lock);
+    for (i = 0; i < SIG_SLOTS && slot < 0; i++)
+        if (!sig_used[i]) {
+            memcpy(sig_tmp[i], tmp, n + 1);
+            sig_used[i] = 1;
+            slot = i;
+        }
+    pthread_mutex_unlock(&sig_lock);
+    return slot;
+}
+
+static void sig_unregister(int slot)
+{
+    if (slot < 0)
+        return;
+    pthread_mutex_lock(&sig_lock);
+    sig_used[slot] = 0;
+    pthread_mutex_unlock(&sig_lock);
+}
+
+/* ---- writing ----------------------------------------------------------------------- */
+
+int sys_write_all(int fd, const void *buf, size_t n)
+{
+    const unsigned char *p = buf;
+    while (n > 0) {
+        ssize_t w = write(fd, p, n);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0)
+            return -1;
+        p += w;
+        n -= (size_t)w;
+    }
+    return 0;
+}
+
+const char *sys_escape(char *out, size_t outlen, const char *s)
+{
+    size_t o = 0;
+    if (outlen == 0)
+        return out;
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c < 0x20 || c == 0x7f) {
+            if (o + 5 > outlen - 1)
+                break;
+            snprintf(out + o, 5, "\\x%02X", c);
+            o += 4;
+        } else {
+            if (o + 1 > outlen - 1)
+                break;
+            out[o++] = (char)c;
+        }
+    }
+    out[o] = '\0';
+    return out;
+}
+
+/* The longest file name in the folder of path (NAME_MAX where pathconf does not say). */
+static size_t name_max(const char *path)
+{
+    char dir[SIG_PATH];
+    const char *slash = strrchr(path, '/');
+    long v;
+    if (slash && (size_t)(slash - path) < sizeof dir) {
+        size_t n = slash == path ? 1 : (size_t)(slash - path);
+        memcpy(dir, path, n);
+        dir[n] = '\0';
+    } else {
+        snprintf(dir, sizeof dir, ".");
+    }
+    v = pathconf(dir, _PC_NAME_MAX);
+#ifdef NAME_MAX
+    if (v <= 0)
+        v = NAME_MAX;
+#endif
+    return v > 0 ? (size_t)v : 255;
+}
+
+#define TMP_SUFFIX ".tmp-XXXXXX"
+
 int sys_tmp_open(sys_tmpfile *t, const char *path, char *err, size_t errlen)
 {
-    size_t n = strlen(path);
+    size_t n = strlen(path), keep = n, nmax = name_max(path);
+    const char *base = strrchr(path, '/');
+    size_t base_len = base ? strlen(base + 1) : n;
+    struct stat st;
     mode_t um;
     t->fd = -1;
-    t->tmp = malloc(n + sizeof(".tmp-XXXXXX"));
+    t->slot = -1;
+    /* the temporary name within NAME_MAX: the destination's name, shortened if need be */
+    if (base_len + sizeof TMP_SUFFIX - 1 > nmax && nmax > sizeof TMP_SUFFIX)
+        keep = n - base_len + (nmax - (sizeof TMP_SUFFIX - 1));
+    t->tmp = malloc(keep + sizeof TMP_SUFFIX);
     if (!t->tmp) {
         snprintf(err, errlen, "%s: out of memory", path);
         return -1;
     }
-    memcpy(t->tmp, path, n);
-    memcpy(t->tmp + n, ".tmp-XXXXXX", sizeof(".tmp-XXXXXX"));
+    memcpy(t->tmp, path, keep);
+    memcpy(t->tmp + keep, TMP_SUFFIX, sizeof TMP_SUFFIX);
     t->fd = mkstemp(t->tmp);
     if (t->fd < 0) {
-        snprintf(err, errlen, "%s: cannot create temporary file %s: %s", path, t->tmp,
-                 strerror(errno));
+        int e = errno;
+        snprintf(err, errlen, "%s: cannot create temporary file %s: %s", path, t->tmp, strerror(e));
         free(t->tmp);
         t->tmp = NULL;
+        errno = e;
         return -1;
     }
-    /* mkstemp creates the file 0600; give it the usual 0666 & ~umask. */
+    t->slot = sig_register(t->tmp);
+    if (stat(path, &st) == 0 && S_ISREG(st.st_mode)) {
+        /* replacing a file keeps its permission bits */
+        (void)fchmod(t->fd, st.st_mode & 0777);
+        return 0;
+    }
+    /* mkstemp creates the file 0600; give a new file the usual 0666 & ~umask. */
     um = umask(022);
     umask(um);
     (void)fchmod(t->fd, (mode_t)(0666 & ~um));
+    return 0;
+}
+
+int sys_check_output(const char *path, char *err, size_t errlen)
+{
+    char dir[SIG_PATH];
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    struct stat st;
+    sys_tmpfile t;
+    if (slash && (size_t)(slash - path) >= sizeof dir) {
+        snprintf(err, errlen, "%s: %s", path, strerror(ENAMETOOLONG));
+        return -1;
+    }
+    if (slash) {
+        size_t n = slash == path ? 1 : (size_t)(slash - path);
+        memcpy(dir, path, n);
+        dir[n] = '\0';
+    } else {
+        snprintf(dir, sizeof dir, ".");
+    }
+    if (!*base) {
+        snprintf(err, errlen, "%s: no file name", path);
+        return -1;
+    }
+    if (strlen(base) > name_max(path)) {
+        snprintf(err, errlen, "%s: file name too long (%zu bytes; at most %zu here)", path,
+                 strlen(base), name_max(path));
+        return -1;
+    }
+    if (stat(dir, &st) != 0) {
+        snprintf(err, errlen, "%s: cannot write there: folder %s: %s", path, dir, strerror(errno));
+        return -1;
+    }
+    if (!S_ISDIR(st.st_mode)) {
+        snprintf(err, errlen, "%s: cannot write there: %s is not a folder", path, dir);
+        return -1;
+    }
+    if (stat(path, &st) == 0) {
+        if (S_ISDIR(st.st_mode)) {
+            snprintf(err, errlen, "%s: is a folder", path);
+            return -1;
+        }
+        if (!S_ISREG(st.st_mode)) {
+            snprintf(err, errlen, "%s: exists and is not a regular file (not replaced)", path);
+            return -1;
+        }
+        if (!(st.st_mode & S_IWUSR)) {
+            snprintf(err, errlen,
+                     "%s: the file is read-only (not replaced; chmod u+w it or "
+                     "choose another name)",
+                     path);
+            return -1;
+        }
+    }
+    /* the folder takes a new file: create and remove the temporary file the write will use */
+    if (sys_tmp_open(&t, path, err, errlen) != 0) {
+        snprintf(err, errlen, "%s: cannot write in folder %s: %s", path, dir, strerror(errno));
+        return -1;
+    }
+    sys_tmp_abort(&t);
     return 0;
 }
 
@@ -165,6 +418,8 @@ void sys_tmp_abort(sys_tmpfile *t)
     t->fd = -1;
     if (t->tmp) {
         unlink(t->tmp);
+        sig_unregister(t->slot);
+        t->slot = -1;
         free(t->tmp);
         t->tmp = NULL;
     }
@@ -192,6 +447,8 @@ int sys_tmp_commit(sys_tmpfile *t, const char *path, char *err, size_t errlen)
         sys_tmp_abort(t);
         return -1;
     }
+    sig_unregister(t->slot);
+    t->slot = -1;
     free(t->tmp);
     t->tmp = NULL;
     return 0;

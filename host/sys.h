@@ -14,6 +14,10 @@ double sys_now(void);
  * one, else the online CPUs; at least 1). */
 int sys_cpu_count(void);
 
+/* The memory available to a new allocation now, in bytes (MemAvailable of /proc/meminfo,
+ * else the free pages); 0 when unknown. */
+unsigned long long sys_mem_available(void);
+
 /* Ends the process now with status: flushes stdout and stderr, then _exit (no atexit
  * handlers or library destructors run, nothing is freed). */
 void sys_exit_now(int status);
@@ -60,16 +64,40 @@ void sys_file_close(sys_file *f);
  * O_EXCL, never following a link; mode 0666 & ~umask), then rename it over the
  * destination, so that a failure never leaves a half-written file. */
 typedef struct {
-    char *tmp; /* "path.tmp-XXXXXX" */
+    char *tmp; /* "path.tmp-XXXXXX" (the name shortened to fit NAME_MAX) */
     int fd;    /* open descriptor, or -1 once closed */
+    int slot;  /* its place in the signal handler's list, or -1 */
 } sys_tmpfile;
 
-/* Creates the temporary file. Returns 0, or -1 with err. */
+/* Creates the temporary file: beside path, named after it with the name cut so that the
+ * whole stays within the folder's NAME_MAX; when path exists, with its permission bits.
+ * Until it is committed or aborted, SIGINT, SIGTERM and SIGHUP remove it (once
+ * sys_signals_install has run). Returns 0, or -1 with err. */
 int sys_tmp_open(sys_tmpfile *t, const char *path, char *err, size_t errlen);
 /* Flushes the descriptor to disk, closes it (unless already closed) and renames the
  * temporary file over path. On failure the temporary file is removed. Returns 0 or -1. */
 int sys_tmp_commit(sys_tmpfile *t, const char *path, char *err, size_t errlen);
 /* Removes the temporary file (failure path), closing the descriptor if still open. */
 void sys_tmp_abort(sys_tmpfile *t);
+
+/* Whether a file can be written at path, before any work: the folder exists and takes a new
+ * file (a temporary file is created there and removed), the name fits, and path is not a
+ * folder, not a special file and not read-only (a read-only file is never replaced).
+ * Returns 0, or -1 with "path: reason" in err. */
+int sys_check_output(const char *path, char *err, size_t errlen);
+
+/* Writes all n bytes to fd (retrying short writes and EINTR). Returns 0 or -1 (errno). */
+int sys_write_all(int fd, const void *buf, size_t n);
+
+/* Copies s into out for a message, with control characters written as \xNN (untrusted
+ * text such as paths never reaches the terminal raw); cut short to fit. Returns out. */
+const char *sys_escape(char *out, size_t outlen, const char *s);
+
+/* Signals: SIGINT, SIGTERM and SIGHUP (unless ignored at start) remove the temporary files
+ * of sys_tmp_open, clear the progress line and end the process with 128 + the signal;
+ * SIGPIPE is ignored (a write to a closed pipe fails with EPIPE instead). */
+void sys_signals_install(void);
+/* The progress line the handler clears: len characters on fd (len 0: none). */
+void sys_signal_line(int fd, size_t len);
 
 #endif

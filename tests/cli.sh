@@ -205,8 +205,8 @@ printf 'v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 65536 
 "$BIN" -o "$T/huge.png" "$T/huge.nff" >"$T/out" 2>"$T/err"; check "huge resolution in a file" 1 $?
 check_grep "huge resolution: file:line" "huge.nff:7: 'resolution' 65536x65536 has more than 2^28 pixels" "$T/err"
 "$BIN" -o "$T/big.png" -W 65536 -H 4097 scenes/default.json >"$T/out" 2>"$T/err"
-check "image size over 2^28 pixels" 1 $?
-check_grep "image size message" "image size 65536x4097 out of range" "$T/err"
+check "image size over 2^28 pixels: a usage error" 2 $?
+check_grep "image size message" "\-W 65536 -H 4097 is 268500992 pixels; an image may have at most 268435456" "$T/err"
 : >"$T/empty.json"
 "$BIN" -o "$T/empty.png" "$T/empty.json" >"$T/out" 2>"$T/err"; check "empty file" 1 $?
 check_grep "empty file: file:line" "empty.json:1: empty file" "$T/err"

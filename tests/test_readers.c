@@ -444,7 +444,8 @@ static void test_nff_bad_numbers(void **state)
     nff_bad(VIEW "s 0 0 nan 1\n", "x.nff:8: ", "'nan'", "not finite", NULL);
     nff_bad(VIEW "l 0 0 1 inf 1 1\n", "x.nff:8: ", "'inf'", "not finite", NULL);
     nff_bad(VIEW "s 0 0 1e999 1\n", "x.nff:8: ", "'1e999'", "not finite", NULL);
-    nff_bad(VIEW "s 0 0 -2e30 1\n", "x.nff:8: ", "'-2e30'", "out of range", "1e30");
+    nff_bad(VIEW "s 0 0 -2e30 1\n", "x.nff:8: ", "'-2e30'", "out of range", "1e18");
+    nff_bad(VIEW "s 0 0 -2e18 1\n", "x.nff:8: ", "'-2e18'", "out of range", "1e18");
     nff_bad(VIEW "p 3\n0 0 0\n1 zero 0\n", "x.nff:10: ", "expected a number", "vertex 2 of 'p 3'",
             "'zero'");
     nff_bad("v\nangle wide\n", "x.nff:2: ", "expected a number after 'angle'", NULL, NULL);
@@ -1056,7 +1057,7 @@ static void test_tiny_numbers(void **state)
     /* an angle that is fine for a few pixels, but not for 65536 rows */
     nff_bad("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 1e-40\nhither 1\nresolution 1 65536\n",
             "x.nff:5: ", "no usable view", "too small", NULL);
-    nff_bad(VIEW "f 1e30 1 1 1e30 0 1 0 1\n", "x.nff:8: ", "Kd * (r g b)", "out of range", NULL);
+    nff_bad(VIEW "f 1e18 1 1 1e18 0 1 0 1\n", "x.nff:8: ", "Kd * (r g b)", "out of range", NULL);
     json_bad(
         "{\n" JCAM ",\n\"materials\": {\"m\": {}}, \"objects\": [\n"
         "{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1e-300, \"material\": \"m\"}]}",
@@ -1072,10 +1073,11 @@ static void test_tiny_numbers(void **state)
              "x.json:3: ", "camera.window", "l < r", NULL);
     json_bad("{\n" JCAM ",\n\"materials\": {\"a\": {\n\"ior\": 1e-300}}}",
              "x.json:4: ", "materials.a.ior", "> 0", NULL);
-    /* a field of view and a distance whose window overflows a float at this size */
+    /* a distance whose window would overflow a float at this size is out of range (CW_MAX_ABS
+     * keeps every coordinate and its square within float range) */
     json_bad("{\"image\": {\"width\": 65536, \"height\": 1},\n\"camera\": {\"eye\": [0, 0, 0],\n"
              "\"view\": [0, 0, -1], \"up\": [0, 1, 0],\n\"fov\": 179.99999, \"distance\": 1e30}}",
-             "x.json:4: ", "camera: gives no usable view", "overflows", NULL);
+             "x.json:4: ", "camera.distance", "out of range", "1e18");
     json_bad("{\"image\": {\"width\": 1, \"height\": 65536},\n\"camera\": {\"eye\": [0, 0, 0],\n"
              "\"view\": [0, 0, -1], \"up\": [0, 1, 0],\n\"fov\": 1e-40, \"distance\": 1e-30}}",
              "x.json:4: ", "camera: gives no usable view", "too small", NULL);
@@ -1128,7 +1130,7 @@ static void test_nff_bad_absurd_counts(void **state)
     nff_bad(VIEW "p 2147483648\n0 0 0\n", "x.nff:8: ", "'p' vertex count", "3..10000000",
             "'2147483648'");
     nff_bad(VIEW "pp 4294967299\n", "x.nff:8: ", "'pp' vertex count", NULL, NULL);
-    nff_bad(VIEW "p 1e30\n", "x.nff:8: ", "'p' vertex count", NULL, NULL);
+    nff_bad(VIEW "p 1e18\n", "x.nff:8: ", "'p' vertex count", NULL, NULL);
     nff_bad(VIEW "p -2147483648\n", "x.nff:8: ", "at least 3", NULL, NULL);
     nff_bad(VIEW "p 0x10\n", "x.nff:8: ", NULL, NULL, NULL); /* hexadecimal: 16, then EOF */
     getrusage(RUSAGE_SELF, &before);

@@ -68,7 +68,7 @@ int main(int argc, char **argv)
     char *png = NULL;
     char cmd[16384];
     scene s;
-    sys_tmpfile t = {NULL, -1}; /* OUT.pov while it is written */
+    sys_tmpfile t = {NULL, -1, -1}; /* OUT.pov while it is written */
     FILE *f;
 
     for (i = 1; i < argc; i++) {

@@ -1,0 +1,195 @@
+/* Tests for the kernel cache's header (host/progcache.c) and for what host/sys.c does so
+ * that nothing is left behind: temporary names within NAME_MAX, permission bits kept, the
+ * output check, escaping, and the signal handler removing temporary files (in a child). */
+#include "testutil.h"
+
+#include "progcache.h"
+#include "sys.h"
+
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static const progcache_key key = {0x0123456789abcdefULL, 0xfedcba9876543210ULL};
+
+/* A cache file: the header, then n bytes of payload. Returns its length. */
+static size_t make_entry(unsigned char *buf, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        buf[PROGCACHE_HEADER_BYTES + i] = (unsigned char)(i * 7 + 3);
+    progcache_header(&key, buf + PROGCACHE_HEADER_BYTES, n, buf);
+    return PROGCACHE_HEADER_BYTES + n;
+}
+
+static void expect_reject(const unsigned char *buf, size_t len, const progcache_key *k,
+                          const char *reason)
+{
+    char why[160] = "";
+    assert_int_equal(progcache_check(buf, len, k, why, sizeof why), -1);
+    if (!strstr(why, reason))
+        fail_msg("reason \"%s\", expected \"%s\"", why, reason);
+}
+
+static void test_cache_header(void **state)
+{
+    unsigned char buf[PROGCACHE_HEADER_BYTES + 1000], bad[sizeof buf];
+    char why[160];
+    size_t len = make_entry(buf, 1000), i;
+    progcache_key other = key;
+    (void)state;
+    assert_int_equal(progcache_check(buf, len, &key, why, sizeof why), 0);
+    /* truncated anywhere, extended by a byte */
+    expect_reject(buf, len / 2, &key, "truncated");
+    expect_reject(buf, 20, &key, "shorter than its header");
+    expect_reject(buf, 0, &key, "shorter than its header");
+    memcpy(bad, buf, len);
+    expect_reject(bad, len - 1, &key, "truncated");
+    /* every single bit flipped, in the header and in the payload, is caught */
+    for (i = 0; i < len * 8; i++) {
+        memcpy(bad, buf, len);
+        bad[i / 8] ^= (unsigned char)(1u << (i % 8));
+        if (progcache_check(bad, len, &key, why, sizeof why) == 0)
+            fail_msg("bit %zu flipped is not caught", i);
+    }
+    memcpy(bad, buf, len);
+    bad[PROGCACHE_HEADER_BYTES + 500] ^= 0x10;
+    expect_reject(bad, len, &key, "payload checksum");
+    memcpy(bad, buf, len);
+    bad[8] ^= 1;
+    expect_reject(bad, len, &key, "header checksum");
+    memcpy(bad, buf, len);
+    bad[0] = 'X';
+    expect_reject(bad, len, &key, "not a clwhitted cache file");
+    /* another device or driver, other kernels or options */
+    other.device ^= 1;
+    expect_reject(buf, len, &other, "another device or driver");
+    other = key;
+    other.build ^= 1ULL << 40;
+    expect_reject(buf, len, &other, "other kernels or options");
+    /* an empty payload is no program */
+    len = make_entry(buf, 0);
+    expect_reject(buf, len, &key, "empty payload");
+}
+
+/* The temporary name of a 250-byte file name stays within NAME_MAX; the file is written. */
+static void test_tmp_name_max(void **state)
+{
+    char dir[] = "/tmp/cw-safety-XXXXXX", path[512], err[1024];
+    const char *base;
+    sys_tmpfile t;
+    (void)state;
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/", dir);
+    memset(path + strlen(path), 'n', 246);
+    strcpy(path + strlen(dir) + 1 + 246, ".png");
+    assert_int_equal(sys_check_output(path, err, sizeof err), 0);
+    assert_int_equal(sys_tmp_open(&t, path, err, sizeof err), 0);
+    base = strrchr(t.tmp, '/') + 1;
+    assert_true(strlen(base) <= 255);
+    assert_int_equal(sys_write_all(t.fd, "x", 1), 0);
+    assert_int_equal(sys_tmp_commit(&t, path, err, sizeof err), 0);
+    assert_int_equal(access(path, F_OK), 0);
+    unlink(path);
+    rmdir(dir);
+}
+
+/* Replacing a file keeps its mode; a read-only file, a folder and a missing folder are
+ * refused by the output check. */
+static void test_output_check(void **state)
+{
+    char dir[] = "/tmp/cw-safety-XXXXXX", path[256], err[1024];
+    struct stat st;
+    sys_tmpfile t;
+    FILE *f;
+    (void)state;
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/a.png", dir);
+    f = fopen(path, "w");
+    assert_non_null(f);
+    fclose(f);
+    chmod(path, 0640);
+    assert_int_equal(sys_check_output(path, err, sizeof err), 0);
+    assert_int_equal(sys_tmp_open(&t, path, err, sizeof err), 0);
+    assert_int_equal(sys_tmp_commit(&t, path, err, sizeof err), 0);
+    assert_int_equal(stat(path, &st), 0);
+    assert_int_equal(st.st_mode & 0777, 0640);
+    chmod(path, 0444);
+    assert_int_equal(sys_check_output(path, err, sizeof err), -1);
+    assert_non_null(strstr(err, "read-only"));
+    unlink(path);
+    assert_int_equal(sys_check_output(dir, err, sizeof err), -1);
+    assert_non_null(strstr(err, "is a folder"));
+    snprintf(path, sizeof path, "%s/none/a.png", dir);
+    assert_int_equal(sys_check_output(path, err, sizeof err), -1);
+    assert_non_null(strstr(err, "No such file"));
+    rmdir(dir);
+}
+
+static void test_escape(void **state)
+{
+    char out[64];
+    (void)state;
+    assert_string_equal(sys_escape(out, sizeof out, "a\033[31mb\n\x7f"), "a\\x1B[31mb\\x0A\\x7F");
+    assert_string_equal(sys_escape(out, sizeof out, "plain/path.png"), "plain/path.png");
+    assert_string_equal(sys_escape(out, 6, "\001\002"), "\\x01"); /* cut, never half escaped */
+}
+
+/* A child opens a temporary file, then gets each signal: it ends with 128 + the signal and
+ * the temporary file is gone. */
+static void test_signal_cleanup(void **state)
+{
+    static const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+    char dir[] = "/tmp/cw-safety-XXXXXX", path[256], tmpname[512];
+    size_t i;
+    (void)state;
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/img.exr", dir);
+    for (i = 0; i < sizeof sigs / sizeof sigs[0]; i++) {
+        int fds[2], status = 0;
+        ssize_t n;
+        pid_t pid;
+        assert_int_equal(pipe(fds), 0);
+        pid = fork();
+        assert_true(pid >= 0);
+        if (pid == 0) {
+            char err[512];
+            sys_tmpfile t;
+            struct sigaction dfl;
+            memset(&dfl, 0, sizeof dfl);
+            dfl.sa_handler = SIG_DFL;
+            sigaction(sigs[i], &dfl, NULL); /* whatever the test runner left */
+            sys_signals_install();
+            if (sys_tmp_open(&t, path, err, sizeof err) != 0)
+                _exit(99);
+            n = write(fds[1], t.tmp, strlen(t.tmp) + 1);
+            (void)n;
+            for (;;)
+                pause();
+        }
+        close(fds[1]);
+        n = read(fds[0], tmpname, sizeof tmpname);
+        close(fds[0]);
+        assert_true(n > 0);
+        assert_int_equal(access(tmpname, F_OK), 0); /* it exists while the child runs */
+        kill(pid, sigs[i]);
+        assert_int_equal(waitpid(pid, &status, 0), pid);
+        assert_true(WIFEXITED(status));
+        assert_int_equal(WEXITSTATUS(status), 128 + sigs[i]);
+        if (access(tmpname, F_OK) == 0)
+            fail_msg("signal %d left %s", sigs[i], tmpname);
+    }
+    rmdir(dir);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cache_header),   cmocka_unit_test(test_tmp_name_max),
+        cmocka_unit_test(test_output_check),   cmocka_unit_test(test_escape),
+        cmocka_unit_test(test_signal_cleanup),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
