@@ -167,7 +167,8 @@ clean:
 # false positive in its uninitialised-value check.
 #   make portability                       every device and scene (tools/portability-check)
 #   make portability PORTABILITY_ARGS=--ci  small images, as CI runs it
-PORTABILITY_TOOLS := $(BUILD)/imgcmp $(BUILD)/cldevices $(BUILD)/oclgrind-fill-shim.so
+PORTABILITY_TOOLS := $(BUILD)/imgcmp $(BUILD)/imgtool $(BUILD)/cldevices \
+                     $(BUILD)/oclgrind-fill-shim.so
 PORTABILITY_ARGS ?=
 
 .PHONY: portability portability-tools
