@@ -76,21 +76,51 @@ static int cache_dir(char *dir, size_t n)
     return 0;
 }
 
+static unsigned long long fnv_platform(unsigned long long h, cl_platform_id plat,
+                                       cl_platform_info what)
+{
+    char buf[512];
+    size_t n = 0;
+    if (!plat || clGetPlatformInfo(plat, what, sizeof buf - 1, buf, &n) != CL_SUCCESS)
+        n = 0;
+    buf[n < sizeof buf ? n : sizeof buf - 1] = '\0';
+    return fnv_str(h, buf);
+}
+
+/* The cache key: a hash of everything that decides the binary. The kernel source and the
+ * build options; the implementation (platform name, vendor and version: two OpenCL
+ * runtimes on the same CPU report the same device name) and the device within it (name,
+ * vendor, device and OpenCL C versions); the driver version, so that a driver update
+ * never loads a binary of the old one; and OCLGRIND_BUILD_OPTIONS, which Oclgrind adds
+ * to the options behind the API's back. */
+static unsigned long long cache_key(cl_device_id dev, const char *source, const char *options)
+{
+    unsigned long long h = 14695981039346656037ULL;
+    const char *og = getenv("OCLGRIND_BUILD_OPTIONS");
+    cl_platform_id plat = NULL;
+    if (clGetDeviceInfo(dev, CL_DEVICE_PLATFORM, sizeof plat, &plat, NULL) != CL_SUCCESS)
+        plat = NULL;
+    h = fnv_str(h, source);
+    h = fnv_str(h, options);
+    h = fnv_platform(h, plat, CL_PLATFORM_NAME);
+    h = fnv_platform(h, plat, CL_PLATFORM_VENDOR);
+    h = fnv_platform(h, plat, CL_PLATFORM_VERSION);
+    h = fnv_info(h, dev, CL_DEVICE_NAME);
+    h = fnv_info(h, dev, CL_DEVICE_VENDOR);
+    h = fnv_info(h, dev, CL_DEVICE_VERSION);
+    h = fnv_info(h, dev, CL_DEVICE_OPENCL_C_VERSION);
+    h = fnv_info(h, dev, CL_DRIVER_VERSION);
+    return fnv_str(h, og ? og : "");
+}
+
 /* DIR/KEY.bin, KEY the hash of the source, the options and the device's identity. */
 static int cache_path(cl_device_id dev, const char *source, const char *options, char *path,
                       size_t n)
 {
     char dir[1024];
-    unsigned long long h = 14695981039346656037ULL;
     if (!cache_dir(dir, sizeof dir))
         return 0;
-    h = fnv_str(h, source);
-    h = fnv_str(h, options);
-    h = fnv_info(h, dev, CL_DEVICE_NAME);
-    h = fnv_info(h, dev, CL_DEVICE_VERSION);
-    h = fnv_info(h, dev, CL_DRIVER_VERSION);
-    h = fnv_info(h, dev, CL_DEVICE_VENDOR);
-    return snprintf(path, n, "%s/%016llx.bin", dir, h) < (int)n;
+    return snprintf(path, n, "%s/%016llx.bin", dir, cache_key(dev, source, options)) < (int)n;
 }
 
 /* A program built from the cached binary, or NULL (no entry, or it did not load or
@@ -223,13 +253,14 @@ static void print_build_log(cl_program p, cl_device_id dev, const char *device_n
 }
 
 int clprog_build(cl_context ctx, cl_device_id dev, const char *device_name, const char *options,
-                 cl_program *out, char *err, size_t errlen)
+                 cl_program *out, int *cached, char *err, size_t errlen)
 {
     const char *src = cw_kernel_source;
     cl_program p;
     cl_int e;
 
     p = cache_load(ctx, dev, src, options);
+    *cached = p != NULL;
     if (p) {
         *out = p;
         return 0;

@@ -61,6 +61,7 @@ typedef struct {
     unsigned long long secondary_rays, secondary_hits;
     double build_s;   /* acceleration structure build on the host */
     double compile_s; /* kernel program build (0 when the program was already built) */
+    int program_cached; /* the last program build loaded clwhitted's binary cache */
     double upload_s;  /* buffer creation and upload */
     double trace_s;   /* last renderer_render */
     int passes;       /* ray-tree levels traced by the last render, summed over its bands
