@@ -61,11 +61,12 @@ typedef struct {
     unsigned long long secondary_rays, secondary_hits;
     double build_s;   /* acceleration structure build on the host */
     double compile_s; /* kernel program build (0 when the program was already built) */
-    int program_cached; /* the last program build loaded clwhitted's binary cache */
     double upload_s;  /* buffer creation and upload */
     double trace_s;   /* last renderer_render */
     int passes;       /* ray-tree levels traced by the last render, summed over its bands
                        * and samples (the wavefront's kernel passes; the same count per pixel) */
+    /* the last kernel program build loaded clwhitted's binary cache */
+    int program_cached;
     /* with settings.stats only (the host then waits for each kernel): time in each kernel,
      * the wavefront's four or the per-pixel kernel */
     double raygen_s, intersect_s, shade_s, occlude_s, pixel_s;
