@@ -166,9 +166,14 @@ clean:
 # build/imgcmp compares images under the check's tolerance; build/cldevices lists the
 # OpenCL devices with their limits; build/oclgrind-fill-shim.so works around an Oclgrind
 # false positive in its uninitialised-value check.
-#   make portability                       every device and scene (tools/portability-check)
-#   make portability PORTABILITY_ARGS=--ci  small images, as CI runs it
-PORTABILITY_TOOLS := $(BUILD)/imgcmp $(BUILD)/cldevices $(BUILD)/oclgrind-fill-shim.so
+#   make portability                       every device and scene (tools/portability-check):
+#                                          PoCL, Intel's OpenCL runtime (tools/install-deps puts
+#                                          it in .cache/intel-ocl), Oclgrind
+#   make portability PORTABILITY_ARGS=--ci  small images (CI adds --require)
+# Intel's runtime for anything else: tools/with-intel-ocl [--only] COMMAND, e.g.
+#   tools/with-intel-ocl --only make test   the tests on Intel's device
+PORTABILITY_TOOLS := $(BUILD)/imgcmp $(BUILD)/imgtool $(BUILD)/cldevices \
+                     $(BUILD)/oclgrind-fill-shim.so
 PORTABILITY_ARGS ?=
 
 .PHONY: portability portability-tools

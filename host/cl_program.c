@@ -50,13 +50,14 @@ static void print_build_log(cl_program p, cl_device_id dev, const char *device_n
 }
 
 int clprog_build(cl_context ctx, cl_device_id dev, const char *device_name, const char *options,
-                 cl_program *out, char *err, size_t errlen)
+                 cl_program *out, int *cached, char *err, size_t errlen)
 {
     const char *src = cw_kernel_source;
     cl_program p;
     cl_int e;
 
     p = progcache_load(ctx, dev, src, options);
+    *cached = p != NULL;
     if (p) {
         *out = p;
         return 0;

@@ -22,10 +22,10 @@ void clprog_options(const clprog_features *ft, int max_depth, int spd, int fast,
                     int pixel, char *buf, size_t n);
 
 /* Builds the embedded kernel source with options for dev: from the binary cache when it
- * holds the program, else from source (then caching its binary). When the build fails,
- * the build log goes to stderr and err names the device (device_name). Returns 0 with
- * *out, or -1 with err. */
+ * holds the program (*cached = 1), else from source (*cached = 0; then caching its
+ * binary). When the build fails, the build log goes to stderr and err names the device
+ * (device_name). Returns 0 with *out, or -1 with err. */
 int clprog_build(cl_context ctx, cl_device_id dev, const char *device_name, const char *options,
-                 cl_program *out, char *err, size_t errlen);
+                 cl_program *out, int *cached, char *err, size_t errlen);
 
 #endif

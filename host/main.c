@@ -184,6 +184,7 @@ static void report(const cli_options *o, const scene *s, const renderer *r, cons
                "(%d passes)\n",
                t->loaded - t->start, st->build_s, st->compile_s, st->upload_s, st->trace_s,
                st->passes);
+        printf("program: %s\n", st->program_cached ? "from the cache" : "built from source");
         if (renderer_strategy(r) == RENDER_PIXEL)
             printf("kernels: pixel %.3f s\n", st->pixel_s);
         else

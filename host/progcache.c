@@ -59,23 +59,48 @@ static unsigned long long fnv_info(unsigned long long h, cl_device_id dev, cl_de
     return fnv_str(h, buf);
 }
 
+static unsigned long long fnv_platform(unsigned long long h, cl_platform_id plat,
+                                       cl_platform_info what)
+{
+    char buf[512];
+    size_t n = 0;
+    if (!plat || clGetPlatformInfo(plat, what, sizeof buf - 1, buf, &n) != CL_SUCCESS)
+        n = 0;
+    buf[n < sizeof buf ? n : sizeof buf - 1] = '\0';
+    return fnv_str(h, buf);
+}
+
 /* The device and driver identity: everything about the device that can change its
- * binaries. A new driver or device gives a new key, hence a new entry. */
+ * binaries. The implementation (platform name, vendor and version: two OpenCL runtimes on
+ * the same CPU report the same device name) and the device within it (name, vendor, device
+ * and OpenCL C versions), and the driver version, so that a driver update never loads a
+ * binary of the old one. A new driver or device gives a new key, hence a new entry. */
 static unsigned long long progcache_identity(cl_device_id dev)
 {
     unsigned long long h = 14695981039346656037ULL;
+    cl_platform_id plat = NULL;
+    if (clGetDeviceInfo(dev, CL_DEVICE_PLATFORM, sizeof plat, &plat, NULL) != CL_SUCCESS)
+        plat = NULL;
+    h = fnv_platform(h, plat, CL_PLATFORM_NAME);
+    h = fnv_platform(h, plat, CL_PLATFORM_VENDOR);
+    h = fnv_platform(h, plat, CL_PLATFORM_VERSION);
     h = fnv_info(h, dev, CL_DEVICE_NAME);
     h = fnv_info(h, dev, CL_DEVICE_VERSION);
+    h = fnv_info(h, dev, CL_DEVICE_OPENCL_C_VERSION);
     h = fnv_info(h, dev, CL_DRIVER_VERSION);
     h = fnv_info(h, dev, CL_DEVICE_VENDOR);
     return h;
 }
 
+/* The build key: the kernel source, the build options, and OCLGRIND_BUILD_OPTIONS, which
+ * Oclgrind adds to the options behind the API's back. */
 void progcache_key_of(cl_device_id dev, const char *source, const char *options, progcache_key *k)
 {
     unsigned long long h = 14695981039346656037ULL;
+    const char *og = getenv("OCLGRIND_BUILD_OPTIONS");
     h = fnv_str(h, source);
     h = fnv_str(h, options);
+    h = fnv_str(h, og ? og : "");
     k->build = h;
     k->device = progcache_identity(dev);
 }

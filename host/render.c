@@ -185,7 +185,8 @@ int renderer_ensure_program(renderer *r, int strategy, char *err, size_t errlen)
         return 0;
     release_program(r);
     t0 = sys_now();
-    if (clprog_build(r->ctx, r->device, r->device_name, options, &r->program, err, errlen) != 0)
+    if (clprog_build(r->ctx, r->device, r->device_name, options, &r->program,
+                     &r->stats.program_cached, err, errlen) != 0)
         return -1;
     e = create_kernels(r, strategy);
     if (e != CL_SUCCESS) {

@@ -71,6 +71,8 @@ typedef struct {
     double trace_s;   /* last renderer_render */
     int passes;       /* ray-tree levels traced by the last render, summed over its bands
                        * and samples (the wavefront's kernel passes; the same count per pixel) */
+    /* the last kernel program build loaded clwhitted's binary cache */
+    int program_cached;
     /* with settings.stats only (the host then waits for each kernel): time in each kernel,
      * the wavefront's four or the per-pixel kernel */
     double raygen_s, intersect_s, shade_s, occlude_s, pixel_s;

@@ -63,11 +63,18 @@ tools/bench --quick --no-cold --sizes 32 --pov-sizes 32 --scenes "$T/tiny.nff" \
 rc=$?
 cat "$T/stdout" "$T/err" >"$T/log"
 check "tools/bench --quick" 0 $rc
-check_true "the SPD table's columns" has "| scene | clwhitted | anchor | POV-Ray | clwhitted/anchor | POV-Ray/clwhitted | clwhitted MB | anchor MB | POV-Ray MB |"
-check_true "the scene's row" grep -Eq '^\| tiny \| [0-9]+\.[0-9]{3} \| ' "$T/log"
-check_true "the total" grep -Eq '^\| \*\*total\*\* \| [0-9]+\.[0-9]{3} \| ' "$T/log"
-check_true "the fixed costs' columns" has "| scene | parse | device | build | compile | upload | trace | write | other | cold compile | anchor build_ms | anchor render_ms | anchor rest |"
-check_true "the fixed costs' row" grep -Eq '^\| tiny( \| [0-9.-]+){12} \|$' "$T/log"
+check_true "the SPD table's columns" has "| scene | device | clwhitted | anchor | POV-Ray | clwhitted/anchor | POV-Ray/clwhitted | clwhitted MB | anchor MB | POV-Ray MB |"
+check_true "the scene's row" grep -Eq '^\| tiny \| pocl-pthread \| [0-9]+\.[0-9]{3} \| ' "$T/log"
+check_true "the total" grep -Eq '^\| \*\*total\*\* \| pocl-pthread \| [0-9]+\.[0-9]{3} \| ' "$T/log"
+check_true "the fixed costs' columns" has "| scene | OpenCL device | parse | device | build | compile | upload | trace | write | other | cold compile | anchor build_ms | anchor render_ms | anchor rest |"
+check_true "the fixed costs' row" grep -Eq '^\| tiny \| pocl-pthread( \| [0-9.-]+){12} \|$' "$T/log"
+# Intel's OpenCL runtime, where tools/install-deps installed it: its own rows
+if tools/with-intel-ocl --print-env >/dev/null 2>&1; then
+    check_true "the Intel device's row" grep -Eq '^\| tiny \| intel-cpu \| [0-9]+\.[0-9]{3} \| ' "$T/log"
+    check_true "the Intel device's total" grep -Eq '^\| \*\*total\*\* \| intel-cpu \| [0-9]+\.[0-9]{3} \| ' "$T/log"
+else
+    echo "bench.sh: Intel's OpenCL runtime is not installed (tools/install-deps): its rows not checked"
+fi
 check_true "the scaling table's columns" has "| scene | NFF MB | parse | build | render | whole process | peak MB | render cw/anchor | whole cw/anchor | rays cw / anchor | anchor -q |"
 check_true "the scaling row" grep -Eq '^\| triangles-200 \| [0-9.]+ \| [0-9.]+ / ' "$T/log"
 check_true "the generated scene kept in the gen folder" test -s "$T/out/gen/triangles-200-32.nff"
@@ -81,14 +88,22 @@ check_true "--update-docs: the rest of the page kept" sh -c \
      sed '/generated section: begin/,/generated section: end/d' '$T/doc-before.md' >'$T/b'; \
      cmp -s '$T/a' '$T/b'"
 if [ $anchor -eq 1 ]; then
-    check_true "the anchor's times" grep -Eq '^\| tiny \| [0-9.]+ \| [0-9]+\.[0-9]{3} \| ' "$T/log"
+    check_true "the anchor's times" grep -Eq '^\| tiny \| pocl-pthread \| [0-9.]+ \| [0-9]+\.[0-9]{3} \| ' "$T/log"
     check_true "the ray counts of both" grep -Eq '^\| tiny \| [0-9]+ / [0-9]+ \(' "$T/log"
     check_true "the anchor's -q in the scaling row" grep -Eq '^\| triangles-200 .* \| high \|$' "$T/log"
 fi
 if [ $pov -eq 1 ]; then
-    check_true "POV-Ray's times" grep -Eq '^\| tiny( \| [0-9.-]+){2} \| [0-9]+\.[0-9]{3} \| ' "$T/log"
+    check_true "POV-Ray's times" grep -Eq '^\| tiny \| pocl-pthread( \| [0-9.-]+){2} \| [0-9]+\.[0-9]{3} \| ' "$T/log"
 fi
 [ $fails -eq 0 ] || sed 's/^/    /' "$T/log"
+
+# --dry-run: the devices and scenes, nothing run
+tools/bench --dry-run --no-anchor --scenes "$T/tiny.nff" --devices pocl \
+    --clwhitted "$BUILD/clwhitted" --out "$T/dry" >"$T/log" 2>&1
+check "tools/bench --dry-run" 0 $?
+check_true "--dry-run names the device and the scene" sh -c \
+    "grep -q '^devices: pocl-pthread' '$T/log' && grep -q '^scenes: tiny$' '$T/log'"
+check_true "--dry-run runs nothing" test ! -e "$T/dry"
 
 # A missing anchor: a clear message before any run, no Python traceback.
 tools/bench --quick --no-cold --no-spd --scale-sizes 10 --scale-kinds spheres \
