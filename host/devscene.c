@@ -12,23 +12,41 @@
 #include "polygon.h"
 #include "scene_geom.h"
 
-/* One line per kernel buffer of kernels/world.h: where its host array is. */
+/* One line per kernel buffer of kernels/world.h: where its host array is, and its length. */
+#define DEVSCENE_ARRAYS(X)                                                                         \
+    X(nodes, ds->tree_wide.nodes, ds->tree_wide.num_nodes)                                         \
+    X(refs, ds->refs, ds->tree.num_refs)                                                           \
+    X(spheres, ds->sph, ds->nsph)                                                                  \
+    X(triangles, ds->tri, ds->ntri)                                                                \
+    X(tri_blocks, ds->tri_blocks, ds->nblocks)                                                     \
+    X(normals, ds->normals, ds->nnorm)                                                             \
+    X(polygons, ds->pg, ds->npg)                                                                   \
+    X(poly_verts, ds->verts, ds->nverts)                                                           \
+    X(poly_bands, ds->bands, ds->nbands)                                                           \
+    X(cones, ds->cones, ds->ncone)
+
 void devscene_world_arrays(const devscene *ds, devscene_world *w)
 {
 #define DEVSCENE_SET(name, data, count)                                                            \
     w->name = (data);                                                                              \
     w->n_##name = (size_t)(count);
-    DEVSCENE_SET(nodes, ds->tree_wide.nodes, ds->tree_wide.num_nodes)
-    DEVSCENE_SET(refs, ds->refs, ds->tree.num_refs)
-    DEVSCENE_SET(spheres, ds->sph, ds->nsph)
-    DEVSCENE_SET(triangles, ds->tri, ds->ntri)
-    DEVSCENE_SET(tri_blocks, ds->tri_blocks, ds->nblocks)
-    DEVSCENE_SET(normals, ds->normals, ds->nnorm)
-    DEVSCENE_SET(polygons, ds->pg, ds->npg)
-    DEVSCENE_SET(poly_verts, ds->verts, ds->nverts)
-    DEVSCENE_SET(poly_bands, ds->bands, ds->nbands)
-    DEVSCENE_SET(cones, ds->cones, ds->ncone)
+    DEVSCENE_ARRAYS(DEVSCENE_SET)
 #undef DEVSCENE_SET
+}
+
+void devscene_free_array(devscene *ds, int which)
+{
+#define DEVSCENE_FREE(name, data, count)                                                           \
+    case CW_WORLD_ARG_##name:                                                                      \
+        free(data);                                                                                \
+        data = NULL;                                                                               \
+        break;
+    switch (which) {
+        DEVSCENE_ARRAYS(DEVSCENE_FREE)
+    default:
+        break;
+    }
+#undef DEVSCENE_FREE
 }
 
 cw_float4 devscene_f4(vec3f v, float w)
@@ -347,8 +365,10 @@ static void set_lane(cw_float4 *v, int lane, float x)
     *f = x;
 }
 
-/* Packs every leaf of triangles only into blocks of four (cw_tri4, in leaf order, so the
- * kernels test them in the order of the references) and points the leaf at its blocks. */
+/* Packs every leaf of two or more triangles only into blocks of four (cw_tri4, in leaf
+ * order, so the kernels test them in the order of the references) and points the leaf at
+ * its blocks. A leaf of one triangle stays a reference: a block of one would test no
+ * faster and cost 160 bytes for the triangle's 64. */
 static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
 {
     bvhw *t = &ds->tree_wide;
@@ -356,7 +376,7 @@ static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
     for (int n = 0; n < t->num_nodes; n++)
         for (int i = 0; i < CW_BVH_WIDTH; i++) {
             int c = t->nodes[n].count[i];
-            if (c > 0 && all_triangles(ds->refs, t->nodes[n].child[i], c))
+            if (c >= 2 && all_triangles(ds->refs, t->nodes[n].child[i], c))
                 nblocks += ((size_t)c + 3) / 4;
         }
     if (nblocks == 0)
@@ -371,7 +391,7 @@ static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
         for (int i = 0; i < CW_BVH_WIDTH; i++) {
             cw_bvhw_node *nd = &t->nodes[n];
             int c = nd->count[i], first = nd->child[i];
-            if (c <= 0 || !all_triangles(ds->refs, first, c))
+            if (c < 2 || !all_triangles(ds->refs, first, c))
                 continue;
             nd->child[i] = (int)b;
             nd->count[i] = -1 - (c + 3) / 4;

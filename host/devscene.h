@@ -48,6 +48,11 @@ typedef struct {
 /* Fills w with the arrays of ds, one per kernel buffer (after devscene_build_bvh). */
 void devscene_world_arrays(const devscene *ds, devscene_world *w);
 
+/* Frees the host array behind kernel buffer `which` (a cw_world_arg) once it is uploaded,
+ * so that the host copy and the device copy of a scene are never all held at once; the
+ * counts stay. */
+void devscene_free_array(devscene *ds, int which);
+
 cw_float4 devscene_f4(vec3f v, float w);
 
 /* Builds the arrays and the primitives' boxes (no BVH yet). Returns 0, or -1 with err

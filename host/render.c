@@ -239,14 +239,16 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
 }
 
 /* Uploads every buffer of CW_WORLD_BUFFERS in list order from the devscene's arrays (the
- * frame is uploaded first by the caller). */
-static int upload_world(renderer *r, const devscene *ds, char *err, size_t errlen)
+ * frame is uploaded first by the caller), freeing each host array once its buffer holds
+ * a copy: the scene is never in memory twice over. */
+static int upload_world(renderer *r, devscene *ds, char *err, size_t errlen)
 {
     devscene_world a;
     devscene_world_arrays(ds, &a);
 #define UPLOAD_WORLD(type, name, what)                                                             \
     if (upload(r, &r->world.name, a.name, a.n_##name, sizeof(type), what, err, errlen))            \
-        return -1;
+        return -1;                                                                                 \
+    devscene_free_array(ds, CW_WORLD_ARG_##name);
     CW_WORLD_BUFFERS(UPLOAD_WORLD)
 #undef UPLOAD_WORLD
     return 0;

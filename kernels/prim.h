@@ -117,7 +117,6 @@ CW_INLINE cw_surface prim_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d)
     }
 #if CW_FAST
     s.err = v3(0.0f, 0.0f, 0.0f);
-    s.flat = 0;
 #endif
     return s;
 }
