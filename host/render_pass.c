@@ -346,7 +346,7 @@ int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen)
            launch(r, kn, (size_t)n, k, err, errlen);
 }
 
-/* The per-pixel kernel over rows [row0, row0 + nrows), in 2-D like cw_raygen. */
+/* The per-pixel kernel over rows [row0, row0 + nrows): CW_PIX_LANES work-items per row. */
 static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, char *err, size_t errlen)
 {
     const char *k = "cw_pixel";
@@ -355,7 +355,9 @@ static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, char 
     cl_int e, crow0 = row0, cnrows = nrows;
     local[1] = 1;
     local[0] = group_size(r, kn);
-    global[0] = ((size_t)r->host_frame.nx + local[0] - 1) / local[0] * local[0];
+    if (local[0] > CW_PIX_LANES)
+        local[0] = CW_PIX_LANES;
+    global[0] = CW_PIX_LANES; /* a power of two, like local[0] (group_size) */
     global[1] = (size_t)nrows;
     if (set_world_args(r, kn, k, err, errlen) ||
         set_mem(kn, PIXEL_LIGHTS, &r->lights, k, r, err, errlen) ||

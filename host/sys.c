@@ -328,16 +328,23 @@ int sys_tmp_open(sys_tmpfile *t, const char *path, char *err, size_t errlen)
     }
     memcpy(t->tmp, path, keep);
     memcpy(t->tmp + keep, TMP_SUFFIX, sizeof TMP_SUFFIX);
-    t->fd = mkstemp(t->tmp);
+    /* The name is made in the signal handler's own slot, registered before the file
+     * exists: a signal at any moment finds the file's final name there once it exists
+     * (before, it unlinks a name that does not exist). */
+    t->slot = sig_register(t->tmp);
+    t->fd = mkstemp(t->slot >= 0 ? sig_tmp[t->slot] : t->tmp);
+    if (t->slot >= 0)
+        memcpy(t->tmp, sig_tmp[t->slot], keep + sizeof TMP_SUFFIX);
     if (t->fd < 0) {
         int e = errno;
         snprintf(err, errlen, "%s: cannot create temporary file %s: %s", path, t->tmp, strerror(e));
+        sig_unregister(t->slot);
+        t->slot = -1;
         free(t->tmp);
         t->tmp = NULL;
         errno = e;
         return -1;
     }
-    t->slot = sig_register(t->tmp);
     if (stat(path, &st) == 0 && S_ISREG(st.st_mode)) {
         /* replacing a file keeps its permission bits */
         (void)fchmod(t->fd, st.st_mode & 0777);

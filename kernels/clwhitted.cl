@@ -18,35 +18,33 @@
 
 #if CW_PIXEL
 
-/* 2-D launch over a band of rows, as cw_raygen, in groups of at most CW_GROUP_SIZE. Each
- * work-item leaves its counts in its own slot of local memory, and the group's first adds
- * their sum to the counters (CW_COUNT_DEPTH: the maximum): no atomic per pixel. */
+/* 2-D launch over a band of rows: y = row within the band, and CW_PIX_LANES work-items per
+ * row, each tracing one run of consecutive pixels of the row (neighbours in a row, for
+ * coherent memory use; no padded work-item runs a pixel), its counts summed in private memory and
+ * added to the counters once (the maximum for CW_COUNT_DEPTH): a few atomics per row, no barrier.
+ * (A local-memory sum with a barrier after a guarded call let PoCL 3.1 run pix_trace for padded
+ * work-items x >= nx of the last row, writing past the image: see docs/portability.md.) */
 __kernel void cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights,
                        __global const cw_material *materials, __global float *image,
                        __global int *counters, int row0, int nrows, float sx, float sy)
 {
-    __local pix_counts counts[CW_GROUP_SIZE];
-    int x = (int)get_global_id(0);
-    int y = (int)get_global_id(1);
-    int lid = (int)get_local_id(0), i, k;
-    pix_counts c;
+    int lane = (int)get_global_id(0), lanes = (int)get_global_size(0);
+    int y = (int)get_global_id(1), x, k;
+    int run = (f->nx + lanes - 1) / lanes, x1 = min(f->nx, (lane + 1) * run);
+    pix_counts sum;
     cw_world w;
-    pix_clear(&c);
-    if (x < f->nx && y < nrows) {
-        CW_MAKE_WORLD(w);
-        c = pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy);
-    }
-    counts[lid] = c;
-    barrier(CLK_LOCAL_MEM_FENCE);
-    if (lid != 0)
+    if (y >= nrows)
         return;
-    for (i = 1; i < (int)get_local_size(0); i++)
-        pix_sum(&c, counts[i]);
+    CW_MAKE_WORLD(w);
+    pix_clear(&sum);
+    for (x = lane * run; x < x1; x++)
+        pix_sum(&sum,
+                pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy));
     for (k = 0; k < CW_COUNT_DEPTH; k++)
-        if (pix_counted(k) && c.n[k] != 0)
-            atomic_add(&counters[k], c.n[k]);
-    if (c.n[CW_COUNT_DEPTH] > 1)
-        atomic_max(&counters[CW_COUNT_DEPTH], c.n[CW_COUNT_DEPTH]);
+        if (pix_counted(k) && sum.n[k] != 0)
+            atomic_add(&counters[k], sum.n[k]);
+    if (sum.n[CW_COUNT_DEPTH] > 1)
+        atomic_max(&counters[CW_COUNT_DEPTH], sum.n[CW_COUNT_DEPTH]);
 }
 
 #else

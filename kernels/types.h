@@ -73,8 +73,12 @@ typedef struct {
 } cw_polygon;
 
 /* Work-items per group, at most (the host asks for fewer where a kernel or device allows
- * fewer): the per-pixel kernel keeps a slot of local memory for each. */
+ * fewer). */
 #define CW_GROUP_SIZE 64
+
+/* Work-items per image row of the per-pixel kernel (cw_pixel), each tracing a run of
+ * consecutive pixels of the row. */
+#define CW_PIX_LANES 16
 
 /* Entries of the kernels' BVH traversal stack (the host checks its tree needs no more). */
 #define CW_BVH_STACK 128

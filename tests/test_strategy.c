@@ -5,7 +5,8 @@
  * per-pixel launches per band and the preview's progressive path. The images must be
  * identical bit for bit and every ray count and the passes equal.
  * Tolerance: only in scenes with refraction (a material with kt > 0 at depth > 1) may a
- * value differ, by at most REFRACTION_REL_TOL of its size (about 8 ulps): the wavefront
+ * value differ (and on the fast path: FAST_REL_TOL), by at most REFRACTION_REL_TOL of its
+ * size (about 8 ulps): the wavefront
  * adds a level's shading points to a pixel in the order its atomics take, which is the
  * per-pixel kernel's order except now and then (docs/model.md). Trees too wide for the
  * per-pixel queue (depth 7 or more; forced with a queue of 2 rays) are walked depth first,
@@ -39,6 +40,16 @@
 #define LARGE_W 256
 #define LARGE_H 257
 #define REFRACTION_REL_TOL 1e-6
+/* The fast path is built with -cl-fast-relaxed-math, which lets the compiler reassociate
+ * and contract each kernel's code its own way: the per-pixel kernel's loop over a run of
+ * pixels and the wavefront's kernels come out with different float operations (measured:
+ * up to 1.3e-4 relative on PoCL, on 17 of 22 scenes). There every value may differ by up
+ * to FAST_REL_TOL, and where mirrors amplify such a difference into another reflected
+ * object (balls, rings: about 1% of the values, up to 0.17) at most FAST_MAX_OVER of the
+ * values may differ more and the ray counts by FAST_COUNT_TOL of their size. */
+#define FAST_REL_TOL 1e-3
+#define FAST_MAX_OVER 0.03
+#define FAST_COUNT_TOL 0.01
 #define DEPTH_FIRST_REL_TOL 2e-5
 #define MAX_SCENES 256
 
@@ -190,14 +201,15 @@ static void write_failure(const image *wf, const image *px, const char *path, co
         fprintf(stderr, "  images and diff: %s/strategy-%s-%s-*\n", OUT_DIR, base, mname);
 }
 
-/* Values of a and b that differ (*worst: the largest relative difference); -1 when a
- * value differs by more than tol (refraction) or, without refraction, at all. */
-static int compare_values(const image *a, const image *b, int refraction, double tol, long *ndiff,
-                          double *worst)
+/* Values of a and b that differ (*ndiff; *worst: the largest relative difference; *over:
+ * how many differ by more than tol). Returns -1 when a value differs by more than tol
+ * (tolerant: refraction, the fast path) or, otherwise, at all. */
+static int compare_values(const image *a, const image *b, int tolerant, double tol, long *ndiff,
+                          double *worst, long *over)
 {
     size_t i, n = (size_t)a->width * (size_t)a->height * 3;
     int bad = 0;
-    *ndiff = 0;
+    *ndiff = *over = 0;
     *worst = 0;
     for (i = 0; i < n; i++) {
         double x = a->rgb[i], y = b->rgb[i], rel;
@@ -207,20 +219,23 @@ static int compare_values(const image *a, const image *b, int refraction, double
         rel = fabs(x - y) / fmax(fabs(x), fabs(y));
         if (!(rel <= *worst))
             *worst = rel;
-        if (!refraction || !(rel <= tol))
+        if (!(rel <= tol))
+            (*over)++;
+        if (!tolerant || !(rel <= tol))
             bad = 1;
     }
     return bad ? -1 : 0;
 }
 
 #define SAME_COUNT(field)                                                                          \
-    if (a->field != b->field) {                                                                    \
+    if (fabs((double)a->field - (double)b->field) > tol * (double)a->field) {                      \
         fprintf(stderr, "  %s: wavefront %llu, pixel %llu\n", #field,                              \
                 (unsigned long long)a->field, (unsigned long long)b->field);                       \
         same = 0;                                                                                  \
     }
 
-static int same_counts(const render_stats *a, const render_stats *b)
+/* The counts of a and b agree: equal, or within tol of their size. */
+static int same_counts(const render_stats *a, const render_stats *b, double tol)
 {
     int same = 1;
     SAME_COUNT(eye_rays)
@@ -241,9 +256,9 @@ static int compare_scene(const char *path, const mode *m, int w, int h, int *loa
     scene s;
     image wf, px;
     render_stats swf, spx;
-    long ndiff;
+    long ndiff, over, n_values;
     double worst;
-    int refraction, rc = 0;
+    int refraction, fast, bad, rc = 0;
 
     *loaded = load(path, w, h, &s) == 0;
     if (!*loaded)
@@ -254,16 +269,25 @@ static int compare_scene(const char *path, const mode *m, int w, int h, int *loa
     scene_free(&s);
     assert_int_equal(wf.width, px.width);
     assert_int_equal(wf.height, px.height);
-    if (compare_values(&wf, &px, refraction, REFRACTION_REL_TOL, &ndiff, &worst) != 0) {
+    fast = m->precision == RENDER_FAST;
+    n_values = 3L * w * h;
+    bad = compare_values(&wf, &px, refraction || fast, fast ? FAST_REL_TOL : REFRACTION_REL_TOL,
+                         &ndiff, &worst, &over) != 0;
+    if (fast) /* a few values moved further by mirrors (see FAST_REL_TOL) */
+        bad = (double)over > FAST_MAX_OVER * (double)n_values;
+    if (bad) {
         fprintf(stderr, "  %s (%s, %dx%d): %ld values differ, up to %.3g relative%s\n", path,
                 m->name, w, h, ndiff, worst,
-                refraction ? " (over the refraction tolerance)" : " (no refraction: none may)");
+                fast         ? " (too many over the fast path's tolerance)"
+                : refraction ? " (over the refraction tolerance)"
+                             : " (no refraction: none may)");
         write_failure(&wf, &px, path, m->name);
         rc = -1;
     } else if (ndiff > 0)
-        printf("    %-44s %-5s refraction: %ld values differ, up to %.3g relative\n", path, m->name,
-               ndiff, worst);
-    if (!same_counts(&swf, &spx)) {
+        printf("    %-44s %-5s %s: %ld values differ, up to %.3g relative, %ld over %.0e\n", path,
+               m->name, fast ? "fast maths" : "refraction", ndiff, worst, over,
+               fast ? FAST_REL_TOL : REFRACTION_REL_TOL);
+    if (!same_counts(&swf, &spx, fast ? FAST_COUNT_TOL : 0.0)) {
         fprintf(stderr, "  %s (%s): the ray counts differ\n", path, m->name);
         rc = -1;
     }
@@ -411,7 +435,7 @@ static void test_deep_refraction(void **state)
     for (q = 0; q < 2; q++) {
         image wf, px;
         render_stats swf, spx;
-        long ndiff;
+        long ndiff, over;
         double worst;
         int bad;
         if (extra[q])
@@ -419,12 +443,12 @@ static void test_deep_refraction(void **state)
         render_with("deep refraction", &s, &modes[4], RENDER_WAVEFRONT, &wf, &swf);
         render_with("deep refraction", &s, &modes[4], RENDER_PIXEL, &px, &spx);
         unsetenv("CLWHITTED_BUILD_OPTIONS");
-        bad = compare_values(&wf, &px, 1, DEPTH_FIRST_REL_TOL, &ndiff, &worst);
+        bad = compare_values(&wf, &px, 1, DEPTH_FIRST_REL_TOL, &ndiff, &worst, &over);
         printf("    queue %s: %llu secondary rays for %d pixels, %d passes; %ld values differ, up "
                "to %.3g relative\n",
                q ? "2" : "32", spx.secondary_rays, 32 * 24, spx.passes, ndiff, worst);
         assert_true(spx.secondary_rays > 16 * 32 * 24);
-        if (bad || !same_counts(&swf, &spx)) {
+        if (bad || !same_counts(&swf, &spx, 0.0)) {
             write_failure(&wf, &px, "deep-refraction", q ? "queue2" : "queue32");
             fail_msg("deep refraction (queue %s): the strategies differ", q ? "2" : "32");
         }
