@@ -1,8 +1,11 @@
 # clwhitted — an OpenCL Whitted ray tracer with a C99 host.
 #   make          build build/clwhitted
-#   make render   install missing packages, build, render the default scene
-#   make test     build and run the whole test suite (on PoCL)
-#   make install  install clwhitted and its man page (PREFIX, BINDIR, MANDIR, DESTDIR)
+#   make render   install the missing build and run-time packages, build, render the
+#                 default scene
+#   make test     install the missing test and development packages, build and run the
+#                 whole test suite (on PoCL)
+#   make install  install clwhitted, clwhitted-imgtool and the man page (PREFIX, BINDIR,
+#                 MANDIR, DESTDIR)
 #   make gallery  render build/gallery/ (the SPD scenes from SPD_DIR and the default scene);
 #                 UPDATE_DOCS=1 also copies it over docs/gallery/
 #   make bench    clwhitted, the Embree anchor and POV-Ray side by side (docs/benchmarks.md)
@@ -42,7 +45,8 @@ DEFAULT_SCENE := scenes/default.json
 # Header dependencies, written by the compiler (-MMD -MP) and by tools/embed-kernels.sh.
 DEPFLAGS = -MMD -MP
 
-.PHONY: all render test clean deps format format-check install uninstall gallery bench spd-counts
+.PHONY: all render test clean deps deps-runtime deps-dev format format-check install uninstall \
+        gallery bench spd-counts
 all: $(BUILD)/clwhitted $(BUILD)/scene2pov
 
 $(BUILD):
@@ -73,22 +77,34 @@ $(BUILD)/clwhitted: $(BUILD)/main.o $(LIB)
 $(BUILD)/scene2pov: tools/scene2pov.c $(LIB) | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
-$(BUILD)/test_%: tests/test_%.c $(LIB) | $(BUILD)
+$(BUILD)/test_%: tests/test_%.c $(LIB) | $(BUILD) deps-dev
 	$(CC) $(CPPFLAGS) -Itests $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -lcmocka -o $@
 
 -include $(wildcard $(BUILD)/*.d)
 
+# tools/install-deps: --runtime for building and rendering, --dev for the rest (tests,
+# sanitizers, fuzzing, benchmarks, reports); both with no option (CI). docs/testing.md
+# lists them.
 deps:
 	sh tools/install-deps
+deps-runtime:
+	sh tools/install-deps --runtime
+# make test installs the Debian test packages; Intel's OpenCL runtime (about 830 MB from
+# PyPI, optional for the tests) only when asked: make test INSTALL_INTEL_OCL=1, or plain
+# tools/install-deps (CI).
+INSTALL_INTEL_OCL ?= 0
+deps-dev:
+	INSTALL_INTEL_OCL=$(INSTALL_INTEL_OCL) sh tools/install-deps --dev
 
-render: deps
+render: deps-runtime
 	$(MAKE) all
 	$(BUILD)/clwhitted -o $(BUILD)/default.exr $(DEFAULT_SCENE)
 	$(BUILD)/clwhitted -o $(BUILD)/default.png $(DEFAULT_SCENE)
 	@echo "Rendered $(DEFAULT_SCENE): $(BUILD)/default.exr (linear) and $(BUILD)/default.png (sRGB)"
 
-# Each test binary runs from the repository root; all of them run even if one fails.
-test: $(BUILD)/clwhitted $(TEST_BIN)
+# Each test binary runs from the repository root; all of them run even if one fails. The
+# test packages come first (deps-dev: an order-only prerequisite of every test binary).
+test: deps-dev $(BUILD)/clwhitted $(TEST_BIN)
 	@fail=0; for t in $(TEST_BIN); do \
 	    echo "== $$t"; $$t || fail=1; \
 	done; \
@@ -103,13 +119,16 @@ test: $(BUILD)/clwhitted $(TEST_BIN)
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
 
 # The installed binary needs nothing else at run time: the kernels are embedded.
-install: $(BUILD)/clwhitted
+# imgtool is installed as clwhitted-imgtool (pbrt-v4 installs an imgtool of its own).
+install: $(BUILD)/clwhitted $(BUILD)/imgtool
 	$(INSTALL) -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(MANDIR)/man1
 	$(INSTALL) -m 755 $(BUILD)/clwhitted $(DESTDIR)$(BINDIR)/clwhitted
+	$(INSTALL) -m 755 $(BUILD)/imgtool $(DESTDIR)$(BINDIR)/clwhitted-imgtool
 	$(INSTALL) -m 644 docs/clwhitted.1 $(DESTDIR)$(MANDIR)/man1/clwhitted.1
 
 uninstall:
-	rm -f $(DESTDIR)$(BINDIR)/clwhitted $(DESTDIR)$(MANDIR)/man1/clwhitted.1
+	rm -f $(DESTDIR)$(BINDIR)/clwhitted $(DESTDIR)$(BINDIR)/clwhitted-imgtool \
+	    $(DESTDIR)$(MANDIR)/man1/clwhitted.1
 
 # The seven SPD scenes at 512x512 and the default scene, with times, in build/gallery/.
 # The tracked docs/gallery/ and docs/quality/ change only when asked: UPDATE_DOCS=1 copies
@@ -193,7 +212,8 @@ portability: portability-tools
 	bash tools/portability-check $(PORTABILITY_ARGS)
 
 # --- Speed against error (tools/quality-report) ---
-# build/imgtool: image conversions for the report (EXR to raw float32). `make quality` runs
+# build/imgtool: the image tool (convert, diff, info; installed as clwhitted-imgtool), and
+# the report's EXR to raw float32. `make quality` runs
 # the report on three SPD scenes (they live outside the repository: QUALITY_SCENES) and
 # writes everything to build/quality/, with the figure and the tables of all the scenes
 # (quality.png, quality.md); UPDATE_DOCS=1 also copies those two over docs/quality/.

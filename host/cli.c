@@ -9,92 +9,95 @@
 
 #include "cli_num.h"
 #include "config.h"
+#include "progress.h"
 #include "sys.h"
 #include "version.h"
 
 #define STR_(x) #x
 #define STR(x) STR_(x)
 
+/* clang-format off */
 static void usage(FILE *f)
 {
-    fprintf(
-        f,
-        "usage: clwhitted [options] SCENE\n"
-        "Renders SCENE (.nff or .json) with an OpenCL Whitted ray tracer.\n"
-        "\n"
-        "Output:\n"
-        "  -o, --output FILE     output image: .exr (linear float) or .png (sRGB 8-bit)\n"
-        "                        (default: the scene's name with .exr, in the current folder)\n"
-        "      --exposure EV     PNG: multiply the values by 2^EV before tone mapping,\n"
-        "                        -" STR(CW_MAX_EXPOSURE) ".." STR(
-            CW_MAX_EXPOSURE) " (default: 0)\n"
-                             "      --tonemap CURVE   PNG: clamp (to [0,1]), reinhard (c/(1+c) per "
-                             "channel) or\n"
-                             "                        aces (Narkowicz's filmic fit) (default: "
-                             "clamp)\n"
-                             "      --half            EXR: 16-bit half floats (default: off, "
-                             "32-bit floats)\n"
-                             "\n"
-                             "Rendering:\n"
-                             "  -W, --width N         image width in pixels, 1.." STR(
-                                 CW_MAX_SIDE) " (default: the scene's)\n"
-                                              "  -H, --height N        image height in pixels, "
-                                              "1.." STR(
-                                                  CW_MAX_SIDE) " (default: the scene's)\n"
-                                                               "  -d, --depth N         maximum "
-                                                               "ray depth, 1.." STR(
-                                                                   CW_MAX_DEPTH) ", the eye ray "
-                                                                                 "being 1 "
-                                                                                 "(default:\n"
-                                                                                 "                 "
-                                                                                 "       the "
-                                                                                 "scene's, "
-                                                                                 "else " STR(
-                                                                                     CW_DEFAULT_DEPTH) ")\n"
-                                                                                                       "      --spp N           samples per pixel, 1.." STR(
-                                                                                                           CW_MAX_SPP) ", a deterministic stratified\n"
-                                                                                                                       "                        pattern (default: 1, the pixel centre)\n"
-                                                                                                                       "      --precision P     robust: watertight, error-bounded intersection; fast: fast\n"
-                                                                                                                       "                        relaxed math and a fixed epsilon (default: robust)\n"
-                                                                                                                       "      --spd             SPD testing procedure: rays through the pixel corners,\n"
-                                                                                                                       "                        four corners averaged per pixel (default: off)\n"
-                                                                                                                       "      --device SPEC     OpenCL device: P:D (platform:device as --list-devices\n"
-                                                                                                                       "                        prints) or part of its name (default: the first CPU device)\n"
-                                                                                                                       "      --kernel K        execution strategy: pixel (a work-item traces a pixel's\n"
-                                                                                                                       "                        whole ray tree) or wavefront (a launch per ray depth);\n"
-                                                                                                                       "                        the image is the same (default: auto, pixel on CPU\n"
-                                                                                                                       "                        devices and wavefront on others)\n"
-                                                                                                                       "\n"
-                                                                                                                       "Information:\n"
-                                                                                                                       "      --stats           count rays (eye, shadow, secondary; hits) and print them\n"
-                                                                                                                       "                        with the time of each phase (default: off)\n"
-                                                                                                                       "  -q, --quiet           print nothing but errors: no progress bar, summary or\n"
-                                                                                                                       "                        warnings (default: off)\n"
-                                                                                                                       "      --list-devices    list the OpenCL platforms and devices, then exit\n"
-                                                                                                                       "      --preview         open a window that shows the render as it refines, with\n"
-                                                                                                                       "                        camera controls (needs a display; press H in it for keys)\n"
-                                                                                                                       "      --preview-script FILE  drive the preview from FILE (for tests)\n"
-                                                                                                                       "  -h, --help            show this help, then exit\n"
-                                                                                                                       "      --version         show the version, then exit\n"
-                                                                                                                       "\n"
-                                                                                                                       "On a terminal a progress bar is drawn on stderr; a summary line (output, size,\n"
-                                                                                                                       "times, Mrays/s) goes to stdout at the end.\n"
-                                                                                                                       "\n"
-                                                                                                                       "Environment:\n"
-                                                                                                                       "  CLWHITTED_BUILD_OPTIONS  extra OpenCL kernel build options (default: none)\n"
-                                                                                                                       "  CLWHITTED_CACHE_DIR      built kernel binaries, so a second run skips the compiler\n"
-                                                                                                                       "                           (default: ~/.cache/clwhitted; empty: no cache)\n"
-                                                                                                                       "  CLWHITTED_PROGRESS       progress bar: always, never, or auto (default: auto,\n"
-                                                                                                                       "                           when stderr is a terminal)\n"
-                                                                                                                       "  POCL_DEVICES             PoCL device drivers to offer, e.g. pthread or basic\n"
-                                                                                                                       "  POCL_MAX_PTHREAD_COUNT   threads of PoCL's pthread device (default: one a core)\n"
-                                                                                                                       "  POCL_CACHE_DIR           PoCL's compiled-kernel cache (default:\n"
-                                                                                                                       "                           ~/.cache/pocl/kcache)\n"
-                                                                                                                       "  OCL_ICD_VENDORS          where the OpenCL loader finds drivers (default:\n"
-                                                                                                                       "                           /etc/OpenCL/vendors)\n"
-                                                                                                                       "\n"
-                                                                                                                       "Exit status: 0 success, 1 input or render error, 2 usage error.\n");
+    fputs(
+"usage: clwhitted [options] SCENE...\n"
+"Renders each SCENE (.nff or .json) with an OpenCL Whitted ray tracer.\n"
+"\n"
+"Output:\n"
+"  -o, --output FILE     output image: .exr (linear float) or .png (sRGB), for one\n"
+"                        SCENE (default: each scene's name with .exr, here)\n"
+"      --exposure EV     PNG: multiply the values by 2^EV before tone mapping,\n"
+"                        -" STR(CW_MAX_EXPOSURE) ".." STR(CW_MAX_EXPOSURE) " (default: 0)\n"
+"      --tonemap CURVE   PNG: clamp (to [0,1]), reinhard (c/(1+c) per channel) or\n"
+"                        aces (Narkowicz's filmic fit) (default: clamp)\n"
+"      --png16           PNG: 16 bits per channel (default: off, 8 bits)\n"
+"      --half            EXR: 16-bit half floats (default: off, 32-bit floats)\n"
+"\n"
+"Rendering:\n"
+"  -W, --width N         image width in pixels, 1.." STR(CW_MAX_SIDE) " (default: the scene's)\n"
+"  -H, --height N        image height in pixels, 1.." STR(CW_MAX_SIDE) " (default: the scene's)\n"
+"  -d, --depth N         maximum ray depth, 1.." STR(CW_MAX_DEPTH) ", the eye ray being 1 (default:\n"
+"                        the scene's, else " STR(CW_DEFAULT_DEPTH) ")\n"
+"      --camera FILE     the camera (and image size and depth) of a JSON camera file,\n"
+"                        as the preview's C key writes it; -W, -H, -d still win\n"
+"                        (default: the scene's camera)\n"
+"      --crop X0,X1,Y0,Y1  render only the pixels X0..X1-1, Y0..Y1-1 (row 0 at the\n"
+"                        top) of the full image: exactly those pixels of it\n"
+"                        (default: the whole image)\n"
+"      --spp N           samples per pixel, 1.." STR(CW_MAX_SPP) ", a deterministic stratified\n"
+"                        pattern (default: 1, the pixel centre)\n"
+"      --precision P     robust: watertight, error-bounded intersection; fast: fast\n"
+"                        relaxed math and a fixed epsilon (default: robust)\n"
+"      --spd             SPD testing procedure: rays through the pixel corners,\n"
+"                        four corners averaged per pixel; not with --spp\n"
+"                        (default: off)\n"
+"      --device SPEC     OpenCL device: P:D (platform:device as --list-devices\n"
+"                        prints) or part of its name (default: the first CPU device)\n"
+"      --kernel K        execution strategy: pixel (a work-item traces a pixel's\n"
+"                        whole ray tree) or wavefront (a launch per ray depth);\n"
+"                        the image is the same (default: auto, pixel on CPU\n"
+"                        devices and wavefront on others)\n"
+"      --threads N       CPU threads, 1.." STR(CW_MAX_THREADS) ": PoCL's device, the BVH build and\n"
+"                        the image writers (default: one a core)\n"
+"\n"
+"Information:\n"
+"      --stats           count rays (eye, shadow, secondary; hits) and print them\n"
+"                        with the time of each phase and the device (default: off)\n"
+"  -q, --quiet           print nothing but errors: no progress bar or summary\n"
+"                        (default: off)\n"
+"      --list-devices    list the OpenCL platforms and devices, then exit\n"
+"      --preview         open a window that shows the render as it refines, with\n"
+"                        camera controls (needs a display; press H in it for keys,\n"
+"                        C to print the camera for a batch render);\n"
+"                        one SCENE, no output, crop, --spd or --stats options\n"
+"      --preview-script FILE  drive the preview from FILE (for tests)\n"
+"  -h, --help            show this help, then exit\n"
+"      --version         show the version, then exit\n"
+"\n"
+"On a terminal a progress bar is drawn on stderr; a summary line (output, size,\n"
+"time, Mrays/s; the kernel compile apart) goes to stdout after each image.\n"
+"\n"
+"Environment:\n"
+"  CLWHITTED_BUILD_OPTIONS  extra OpenCL kernel build options (default: none)\n"
+"  CLWHITTED_CACHE_DIR      built kernel binaries, so a second run skips the compiler\n"
+"                           (default: ~/.cache/clwhitted; empty: no cache)\n"
+"  CLWHITTED_SUMMARY        the summary line: short, or long (every phase's time and\n"
+"                           the device, for scripts) (default: short)\n"
+"  CLWHITTED_PROGRESS       progress: always (a bar), never, log (a line every\n"
+"                           " STR(CW_PROGRESS_LOG_S) " s, for logs), or auto (default: auto, a bar when\n"
+"                           stderr is a terminal)\n"
+"  POCL_DEVICES             PoCL device drivers to offer, e.g. pthread or basic\n"
+"  POCL_MAX_PTHREAD_COUNT   threads of PoCL's pthread device (default: one a core;\n"
+"                           --threads sets it)\n"
+"  POCL_CACHE_DIR           PoCL's compiled-kernel cache (default:\n"
+"                           ~/.cache/pocl/kcache)\n"
+"  OCL_ICD_VENDORS          where the OpenCL loader finds drivers (default:\n"
+"                           /etc/OpenCL/vendors)\n"
+"\n"
+"Exit status: 0 success, 1 input or render error, 2 usage error.\n",
+        f);
 }
+/* clang-format on */
 
 static void version(void)
 {
@@ -146,7 +149,11 @@ enum {
     OPT_HALF,
     OPT_PREVIEW,
     OPT_PREVIEW_SCRIPT,
-    OPT_KERNEL
+    OPT_KERNEL,
+    OPT_THREADS,
+    OPT_CROP,
+    OPT_PNG16,
+    OPT_CAMERA
 };
 
 static const struct option cli_longopts[] = {
@@ -163,6 +170,10 @@ static const struct option cli_longopts[] = {
     {"exposure", required_argument, NULL, OPT_EXPOSURE},
     {"tonemap", required_argument, NULL, OPT_TONEMAP},
     {"half", no_argument, NULL, OPT_HALF},
+    {"png16", no_argument, NULL, OPT_PNG16},
+    {"threads", required_argument, NULL, OPT_THREADS},
+    {"crop", required_argument, NULL, OPT_CROP},
+    {"camera", required_argument, NULL, OPT_CAMERA},
     {"list-devices", no_argument, NULL, OPT_LIST},
     {"preview", no_argument, NULL, OPT_PREVIEW},
     {"preview-script", required_argument, NULL, OPT_PREVIEW_SCRIPT},
@@ -170,6 +181,41 @@ static const struct option cli_longopts[] = {
     {"help", no_argument, NULL, 'h'},
     {"version", no_argument, NULL, OPT_VERSION},
     {NULL, 0, NULL, 0}};
+
+/* --crop X0,X1,Y0,Y1: four integers, X0 < X1 and Y0 < Y1 (the image's size is checked
+ * once the scene is loaded). */
+static int parse_crop(const char *s, render_settings *st)
+{
+    long v[4];
+    char buf[128], *p, *q;
+    int k;
+    if (strlen(s) < sizeof buf) {
+        memcpy(buf, s, strlen(s) + 1);
+        for (k = 0, p = buf; k < 4; k++, p = q + 1) {
+            q = strchr(p, ',');
+            if ((q == NULL) != (k == 3))
+                break;
+            if (q)
+                *q = '\0';
+            if (cli_parse_long(p, 0, CW_MAX_SIDE, &v[k]) != 0)
+                break;
+            if (!q) {
+                k++;
+                break;
+            }
+        }
+        if (k == 4 && v[0] < v[1] && v[2] < v[3]) {
+            for (k = 0; k < 4; k++)
+                st->crop[k] = (int)v[k];
+            return 0;
+        }
+    }
+    fprintf(stderr,
+            "clwhitted: --crop expects X0,X1,Y0,Y1 with 0 <= X0 < X1 and 0 <= Y0 < Y1 "
+            "(pixels), got '%s'\n" CLI_HINT,
+            s);
+    return -1;
+}
 
 /* One option; returns 0, or -1 after printing a usage error. */
 static int parse_option(int c, const char *arg, cli_options *o)
@@ -185,10 +231,26 @@ static int parse_option(int c, const char *arg, cli_options *o)
     case 'd':
         return parse_int("--depth", arg, 1, CW_MAX_DEPTH, &o->depth);
     case OPT_DEVICE:
+        if (!*arg) {
+            fprintf(stderr, "clwhitted: --device expects P:D or part of a device name, got "
+                            "''\n" CLI_HINT);
+            return -1;
+        }
         o->device = arg;
         return 0;
     case OPT_SPP:
+        o->spp_given = 1;
         return parse_int("--spp", arg, 1, CW_MAX_SPP, &o->settings.spp);
+    case OPT_THREADS:
+        return parse_int("--threads", arg, 1, CW_MAX_THREADS, &o->threads);
+    case OPT_CROP:
+        return parse_crop(arg, &o->settings);
+    case OPT_PNG16:
+        o->write.png16 = 1;
+        return 0;
+    case OPT_CAMERA:
+        o->camera = arg;
+        return 0;
     case OPT_PRECISION:
         if (strcmp(arg, "robust") == 0)
             o->settings.precision = RENDER_ROBUST;
@@ -218,9 +280,11 @@ static int parse_option(int c, const char *arg, cli_options *o)
         o->settings.stats = 1;
         return 0;
     case OPT_EXPOSURE:
+        o->png_opt = "--exposure";
         return parse_double("--exposure", arg, -CW_MAX_EXPOSURE, CW_MAX_EXPOSURE,
                             &o->write.exposure);
     case OPT_TONEMAP:
+        o->png_opt = "--tonemap";
         o->write.tonemap = image_tonemap_parse(arg);
         if (o->write.tonemap < 0) {
             fprintf(
@@ -252,10 +316,77 @@ static int parse_option(int c, const char *arg, cli_options *o)
     }
 }
 
+/* Prints a usage error (one line and the hint). Returns CLI_EXIT. */
+static int usage_error(const char *msg)
+{
+    fprintf(stderr, "clwhitted: %s\n" CLI_HINT, msg);
+    return CLI_EXIT;
+}
+
+/* Options that make no sense together, and the environment: a usage error each. Returns
+ * 0, or -1 after printing it. */
+static int check_combinations(cli_options *o)
+{
+    char err[2048];
+    const char *env = getenv("CLWHITTED_PROGRESS");
+    int png = o->output && sys_has_ext(o->output, ".png");
+
+    if (o->output && image_check_path(o->output, err, sizeof err) != 0)
+        return usage_error(shown(err)), -1;
+    if ((o->progress = progress_mode_parse(env)) < 0) {
+        snprintf(err, sizeof err,
+                 "CLWHITTED_PROGRESS expects 'auto', 'always', 'never' or 'log', got '%.64s'", env);
+        return usage_error(err), -1;
+    }
+    env = getenv("CLWHITTED_SUMMARY");
+    if (env && *env && strcmp(env, "short") != 0 && strcmp(env, "long") != 0) {
+        snprintf(err, sizeof err, "CLWHITTED_SUMMARY expects 'short' or 'long', got '%.64s'",
+                 shown(env));
+        return usage_error(err), -1;
+    }
+    o->summary_long = env && strcmp(env, "long") == 0;
+    if (o->settings.spd && o->spp_given)
+        return usage_error("--spd traces the pixel corners: it takes no --spp"), -1;
+    if (o->output && o->nscenes > 1)
+        return usage_error("-o names one image: give one scene with it, or none to write "
+                           "each scene's NAME.exr"),
+               -1;
+    if (o->preview) {
+        const char *bad = o->nscenes > 1        ? "more than one scene"
+                          : o->output           ? "-o"
+                          : o->png_opt          ? o->png_opt
+                          : o->write.half       ? "--half"
+                          : o->write.png16      ? "--png16"
+                          : o->settings.spd     ? "--spd"
+                          : o->settings.stats   ? "--stats"
+                          : o->settings.crop[1] ? "--crop"
+                                                : NULL;
+        if (bad) {
+            snprintf(err, sizeof err,
+                     "%s does not apply to --preview (F5 saves NAME-preview-TIME.exr and .png; "
+                     "C prints the camera for a batch render)",
+                     bad);
+            return usage_error(err), -1;
+        }
+        return 0;
+    }
+    if (!png && o->png_opt) {
+        snprintf(err, sizeof err,
+                 "%s applies to PNG output (-o FILE.png); EXR keeps the linear "
+                 "values",
+                 o->png_opt);
+        return usage_error(err), -1;
+    }
+    if (!png && o->write.png16)
+        return usage_error("--png16 applies to PNG output (-o FILE.png)"), -1;
+    if (png && o->write.half)
+        return usage_error("--half applies to EXR output"), -1;
+    return 0;
+}
+
 int cli_parse(int argc, char **argv, cli_options *o, int *status)
 {
     static char progname[] = "clwhitted"; /* getopt's own messages name the program by it */
-    char err[2048];
     int c;
 
     memset(o, 0, sizeof *o);
@@ -278,10 +409,6 @@ int cli_parse(int argc, char **argv, cli_options *o, int *status)
     }
     if (o->list_devices)
         return CLI_RUN;
-    if (o->output && image_check_path(o->output, err, sizeof err) != 0) {
-        fprintf(stderr, "clwhitted: %s\n" CLI_HINT, shown(err));
-        return CLI_EXIT;
-    }
     if (o->width > 0 && o->height > 0 && (long long)o->width * o->height > CW_MAX_PIXELS) {
         fprintf(stderr,
                 "clwhitted: -W %d -H %d is %lld pixels; an image may have at most %ld "
@@ -289,11 +416,10 @@ int cli_parse(int argc, char **argv, cli_options *o, int *status)
                 o->width, o->height, (long long)o->width * o->height, (long)CW_MAX_PIXELS);
         return CLI_EXIT;
     }
-    if (optind != argc - 1) {
-        fprintf(stderr, "clwhitted: %s\n" CLI_HINT,
-                optind >= argc ? "no scene file given" : "more than one scene file given");
-        return CLI_EXIT;
-    }
-    o->scene = argv[optind];
-    return CLI_RUN;
+    if (optind >= argc)
+        return usage_error("no scene file given");
+    o->scenes = (const char *const *)argv + optind;
+    o->nscenes = argc - optind;
+    o->scene = o->scenes[0];
+    return check_combinations(o) == 0 ? CLI_RUN : CLI_EXIT;
 }

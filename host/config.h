@@ -50,6 +50,12 @@
 /* The kernel cache (progcache.c) reads entries of at most this many bytes. */
 #define CW_PROGCACHE_MAX_BYTES (256LL << 20)
 
+/* --threads N: 1..CW_MAX_THREADS. */
+#define CW_MAX_THREADS 1024
+
+/* CLWHITTED_PROGRESS=log: a progress line every CW_PROGRESS_LOG_S seconds. */
+#define CW_PROGRESS_LOG_S 5
+
 /* The preview's default samples per pixel before it stops refining. */
 #define CW_PREVIEW_DEFAULT_SPP 16
 

@@ -27,6 +27,7 @@ typedef struct {
     double exposure; /* PNG: values are multiplied by 2^exposure, then tone mapped */
     int tonemap;     /* PNG: IMAGE_TONEMAP_*; EXR keeps the linear values */
     int half;        /* EXR: 16-bit half floats instead of 32-bit floats */
+    int png16;       /* PNG: 16 bits per channel instead of 8 */
     /* Metadata (NULL or render_s < 0: left out). PNG: tEXt chunks Title, Software, Source,
      * Comment, Render Time, Creation Time and a tIME chunk. EXR: string attributes scene,
      * software, device, comments, capDate (local time), float utcOffset and renderTime. */

@@ -1,4 +1,4 @@
-/* Writing PNG: 8-bit sRGB after exposure and tone map, with the metadata of
+/* Writing PNG: 8- or 16-bit sRGB after exposure and tone map, with the metadata of
  * image_write_opts as text chunks and tIME (libpng), the pixels compressed in pieces on
  * several threads (zlib, par.c); and the libpng error handling that the reader
  * (image_read.c) shares. See image.h and image_internal.h. */
@@ -104,8 +104,8 @@ static void png_meta_fill(png_meta *m, const image_write_opts *o)
     png_convert_from_time_t(&m->mtime, now);
 }
 
-/* Writes the signature and the chunks before the pixels of an 8-bit RGB PNG to fp. */
-static int png_write_head(FILE *fp, int w, int h, const png_meta *m, image_png_errctx *e)
+/* Writes the signature and the chunks before the pixels of an 8- or 16-bit RGB PNG to fp. */
+static int png_write_head(FILE *fp, int w, int h, int bits, const png_meta *m, image_png_errctx *e)
 {
     png_structp png =
         png_create_write_struct(PNG_LIBPNG_VER_STRING, e, image_png_error_cb, image_png_warning_cb);
@@ -125,7 +125,7 @@ static int png_write_head(FILE *fp, int w, int h, const png_meta *m, image_png_e
         return -1;
     }
     png_init_io(png, fp);
-    png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, 8, PNG_COLOR_TYPE_RGB,
+    png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, bits, PNG_COLOR_TYPE_RGB,
                  PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     /* sRGB chunk plus the matching gAMA and cHRM for decoders that ignore sRGB. */
     png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
@@ -167,7 +167,10 @@ typedef struct {
     image_srgb8_table srgb;
     double scale;
     int tonemap;
-    size_t row_bytes; /* 1 + 3 * width: the filter type byte and the pixels */
+    double exposure;
+    int png16;        /* 16 bits per channel */
+    size_t row_bytes; /* 1 + 3 * width (6 * width at 16 bits): the filter type byte and the
+                       * pixels */
     int rows, pieces; /* rows per piece (the last may have fewer) */
     png_thread th[CW_MAX_WRITE_THREADS];
     png_slot *slot;
@@ -182,6 +185,19 @@ static int png_fail(png_err *e, int kind, int zerr)
     e->zerr = zerr;
     e->werr = kind == PNG_ERR_WRITE ? (errno ? errno : EIO) : 0;
     return kind;
+}
+
+/* n linear values to 16-bit sRGB, big-endian: exposure, tone map, the sRGB transfer,
+ * rounded to the nearest of 65536 levels. */
+static void png_encode16(const float *v, size_t n, double exposure, int tonemap, unsigned char *out)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        double e = image_srgb_encode(image_display_value(v[i], exposure, tonemap));
+        unsigned q = (unsigned)(e * 65535.0 + 0.5);
+        out[2 * i] = (unsigned char)(q >> 8);
+        out[2 * i + 1] = (unsigned char)(q & 0xff);
+    }
 }
 
 /* Compresses piece j: its rows in sRGB, filter type 0, deflated into slot j % window. */
@@ -208,8 +224,12 @@ static int png_piece_job(void *ctx, int j, int thread)
     for (y = 0; y < n; y++) {
         unsigned char *row = t->rows + (size_t)y * p->row_bytes;
         row[0] = 0; /* filter type None */
-        image_srgb8_encode(&p->srgb, p->img->rgb + (size_t)(y0 + y) * (size_t)w * 3, (size_t)w * 3,
-                           p->scale, p->tonemap, row + 1);
+        if (p->png16)
+            png_encode16(p->img->rgb + (size_t)(y0 + y) * (size_t)w * 3, (size_t)w * 3, p->exposure,
+                         p->tonemap, row + 1);
+        else
+            image_srgb8_encode(&p->srgb, p->img->rgb + (size_t)(y0 + y) * (size_t)w * 3,
+                               (size_t)w * 3, p->scale, p->tonemap, row + 1);
     }
     /* deflateBound covers a whole stream; a sync flush adds at most an empty stored block */
     bound = deflateBound(&t->z, (uLong)raw) + 16;
@@ -306,8 +326,10 @@ static int png_write_pixels(const image *img, const image_write_opts *o, FILE *f
     p.img = img;
     p.scale = pow(2.0, o->exposure);
     p.tonemap = o->tonemap;
+    p.exposure = o->exposure;
+    p.png16 = o->png16 != 0;
     p.fp = fp;
-    p.row_bytes = 1 + (size_t)img->width * 3;
+    p.row_bytes = 1 + (size_t)img->width * (p.png16 ? 6 : 3);
     rows = CW_PNG_PIECE_BYTES / p.row_bytes;
     p.rows = rows < 1 ? 1 : rows > (size_t)img->height ? img->height : (int)rows;
     p.pieces = (img->height - 1) / p.rows + 1;
@@ -372,7 +394,7 @@ int image_png_write(const image *img, const char *path, const image_write_opts *
     }
     memset(&e, 0, sizeof e);
     errno = 0;
-    rc = png_write_head(fp, img->width, img->height, &meta, &e);
+    rc = png_write_head(fp, img->width, img->height, o->png16 ? 16 : 8, &meta, &e);
     if (rc != 0) {
         int why = ferror(fp) ? (errno ? errno : EIO) : 0; /* libpng says only "Write Error" */
         image_set_err(err, errlen, "%s: PNG encoding failed: %s%s%s", path,

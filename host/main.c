@@ -49,6 +49,7 @@ typedef struct {
  * the thread that set it exits). */
 typedef struct {
     const cli_options *o;
+    const char *path; /* the scene file */
     scene *s;
     int rc; /* 0, or -1 with err */
     char err[2048];
@@ -59,9 +60,10 @@ typedef struct {
 
 /* Reads the scene file and finishes the scene at the command line's size and depth.
  * Returns 0, or -1 with err. */
-static int load_scene(const cli_options *o, scene *s, char *err, size_t errlen)
+static int load_scene(const cli_options *o, const char *path, scene *s, char *err, size_t errlen)
 {
-    if (scene_load(o->scene, s, err, errlen) != 0 ||
+    if (scene_load(path, s, err, errlen) != 0 ||
+        (o->camera && scene_load_camera(o->camera, s, err, errlen) != 0) ||
         scene_finish(s, o->width, o->height, o->depth, err, errlen) != 0)
         return -1;
     return 0;
@@ -70,16 +72,17 @@ static int load_scene(const cli_options *o, scene *s, char *err, size_t errlen)
 static void *scene_job_main(void *arg)
 {
     scene_job *j = arg;
-    j->rc = load_scene(j->o, j->s, j->err, sizeof j->err);
+    j->rc = load_scene(j->o, j->path, j->s, j->err, sizeof j->err);
     j->done_at = sys_now();
     return NULL;
 }
 
 /* Starts the load, or does it now when no thread can be started. */
-static void scene_job_begin(scene_job *j, const cli_options *o, scene *s)
+static void scene_job_begin(scene_job *j, const cli_options *o, const char *path, scene *s)
 {
     memset(j, 0, sizeof *j);
     j->o = o;
+    j->path = path;
     j->s = s;
     j->threaded = pthread_create(&j->tid, NULL, scene_job_main, j) == 0;
     if (!j->threaded)
@@ -137,24 +140,32 @@ static int summary_written(void)
 
 /* The metadata of the image: title (the scene file's base name), software, device, the
  * settings (as the format uses them) and the render time. Strings live in the buffers. */
-static void set_metadata(const cli_options *o, const scene *s, const renderer *r, int is_exr,
-                         double render_s, image_write_opts *w, char *title, size_t ntitle,
-                         char *software, size_t nsoftware, char *settings, size_t nsettings)
+static void set_metadata(const cli_options *o, const char *path, const scene *s, const renderer *r,
+                         int is_exr, double render_s, image_write_opts *w, char *title,
+                         size_t ntitle, char *software, size_t nsoftware, char *settings,
+                         size_t nsettings)
 {
-    const char *slash = strrchr(o->scene, '/');
+    const char *slash = strrchr(path, '/');
     const render_settings *st = &o->settings;
     const char *precision = st->precision == RENDER_FAST ? "fast" : "robust";
+    char samples[32], crop[64] = "";
     snprintf(software, nsoftware, "clwhitted %s", CW_VERSION);
-    snprintf(title, ntitle, "%s", slash ? slash + 1 : o->scene);
+    snprintf(title, ntitle, "%s", slash ? slash + 1 : path);
+    if (st->spd) /* the corners; --spp is rejected with --spd */
+        snprintf(samples, sizeof samples, "spd");
+    else
+        snprintf(samples, sizeof samples, "spp %d", st->spp);
+    if (st->crop[1] != 0)
+        snprintf(crop, sizeof crop, ", crop %d,%d,%d,%d", st->crop[0], st->crop[1], st->crop[2],
+                 st->crop[3]);
     if (is_exr)
-        snprintf(settings, nsettings, "%dx%d, depth %d, spp %d, precision %s%s%s", s->width,
-                 s->height, s->max_depth, st->spp, precision, st->spd ? ", spd" : "",
-                 w->half ? ", half floats" : "");
+        snprintf(settings, nsettings, "%dx%d%s, depth %d, %s, precision %s%s", s->width, s->height,
+                 crop, s->max_depth, samples, precision, w->half ? ", half floats" : "");
     else
         snprintf(settings, nsettings,
-                 "%dx%d, depth %d, spp %d, precision %s%s, exposure %+g EV, tonemap %s", s->width,
-                 s->height, s->max_depth, st->spp, precision, st->spd ? ", spd" : "", w->exposure,
-                 image_tonemap_name(w->tonemap));
+                 "%dx%d%s, depth %d, %s, precision %s, exposure %+g EV, tonemap %s%s", s->width,
+                 s->height, crop, s->max_depth, samples, precision, w->exposure,
+                 image_tonemap_name(w->tonemap), w->png16 ? ", 16-bit" : "");
     w->title = title;
     w->software = software;
     w->source = renderer_device_name(r);
@@ -162,28 +173,41 @@ static void set_metadata(const cli_options *o, const scene *s, const renderer *r
     w->render_s = render_s;
 }
 
-/* The summary line and, with --stats, the ray counts and phase times. */
-static void report(const cli_options *o, const scene *s, const renderer *r, const char *output,
-                   const batch_times *t, const render_stats *st, double trace_s)
+/* The summary line (short: the output, its size, the time, the rate, and the kernel
+ * compile apart when there was one; CLWHITTED_SUMMARY=long: every phase) and, with
+ * --stats, the device, the ray counts and the phase times. */
+static void report(const cli_options *o, const image *img, const scene *s, const renderer *r,
+                   const char *output, const batch_times *t, const render_stats *st, double trace_s)
 {
     unsigned long long rays = st->eye_rays + st->secondary_rays + st->shadow_rays;
-    char rate[32], shown[1024];
+    double compile = st->compile_s + st->warmup_s;
+    char rate[32], comp[64] = "", shown[1024];
     progress_format_rate(rate, sizeof rate, trace_s > 0 ? (double)rays / trace_s * 1e-6 : 0.0);
-    if (!o->quiet)
+    if (compile >= 0.05)
+        snprintf(comp, sizeof comp, "; compile %.2f s", compile);
+    sys_escape(shown, sizeof shown, output);
+    if (!o->quiet && o->summary_long) /* every phase, for scripts */
         printf("clwhitted: wrote %s (%dx%d, depth %d) in %.3f s on %s: load %.3f s, setup %.3f s, "
                "render %.3f s, %s Mrays/s\n",
-               sys_escape(shown, sizeof shown, output), s->width, s->height, s->max_depth,
-               t->written - t->start, renderer_device_name(r), t->loaded - t->start,
-               t->set_up - t->loaded, t->rendered - t->set_up, rate);
+               shown, img->width, img->height, s->max_depth, t->written - t->start,
+               renderer_device_name(r), t->loaded - t->start, t->set_up - t->loaded,
+               t->rendered - t->set_up, rate);
+    else if (!o->quiet)
+        printf("clwhitted: wrote %s (%dx%d) in %.2f s, %s Mrays/s%s\n", shown, img->width,
+               img->height, t->written - t->start - compile, rate, comp);
     if (o->settings.stats) {
+        printf("device: %s, %d compute unit%s, %s kernel; image %dx%d, depth %d\n",
+               renderer_device_name(r), renderer_compute_units(r),
+               renderer_compute_units(r) == 1 ? "" : "s",
+               render_strategy_name(renderer_strategy(r)), s->width, s->height, s->max_depth);
         printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu "
                "(hit %llu)\n",
                st->eye_rays, st->eye_hits, st->shadow_rays, st->shadow_blocked, st->secondary_rays,
                st->secondary_hits);
         printf("time: parse %.3f s, build %.3f s, compile %.3f s, upload %.3f s, trace %.3f s "
-               "(%d passes)\n",
+               "(%d passes), first launch %.3f s\n",
                t->loaded - t->start, st->build_s, st->compile_s, st->upload_s, st->trace_s,
-               st->passes);
+               st->passes, st->warmup_s);
         printf("program: %s\n", st->program_cached ? "from the cache" : "built from source");
         if (renderer_strategy(r) == RENDER_PIXEL)
             printf("kernels: pixel %.3f s\n", st->pixel_s);
@@ -205,11 +229,12 @@ typedef struct {
     char *default_out;
 } batch;
 
-/* Renders the finished scene b->s once and writes it to o->output (or the default name).
- * Returns the exit status. */
-static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times *t)
+/* Renders the finished scene b->s (from the file path) once and writes it to o->output (or
+ * b->default_out). Returns the exit status. */
+static int render_batch(cli_options *o, const char *path, batch *b, progress_bar *bar,
+                        batch_times *t)
 {
-    char err[2048], title[256], software[64], settings[256];
+    char err[2048], title[256], software[64], settings[320];
     const char *output = o->output ? o->output : b->default_out;
     const scene *s = &b->s;
     renderer *r;
@@ -217,14 +242,11 @@ static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times
     double trace_s;
     int is_exr;
 
-    is_exr = sys_has_ext(output, ".exr");
-    if (!o->quiet) {
-        if (is_exr && (o->write.exposure != 0 || o->write.tonemap != IMAGE_TONEMAP_CLAMP))
-            fprintf(stderr, "clwhitted: warning: --exposure and --tonemap apply to PNG output "
-                            "only; EXR keeps the linear values\n");
-        if (!is_exr && o->write.half)
-            fprintf(stderr, "clwhitted: warning: --half applies to EXR output only\n");
+    if (render_check_crop(&o->settings, s->width, s->height, err, sizeof err) != 0) {
+        fprintf(stderr, "clwhitted: %s\n" CLI_HINT, err);
+        return 2;
     }
+    is_exr = sys_has_ext(output, ".exr");
     progress_status(bar, "building the kernels ...");
     if (b->r_rc != 0) {
         fail_msg(bar, b->r_err);
@@ -240,6 +262,7 @@ static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times
     renderer_set_progress(r, progress_update, bar);
     progress_begin(bar);
     progress_update(bar, 0.0, 0);
+    image_free(&b->img);
     if (renderer_render(r, &b->img, err, sizeof err) != 0) {
         fail_msg(bar, err);
         return 1;
@@ -248,53 +271,84 @@ static int render_batch(cli_options *o, batch *b, progress_bar *bar, batch_times
     t->rendered = sys_now();
     renderer_get_stats(r, &st);
     trace_s = st.trace_s > 0 ? st.trace_s : t->rendered - t->set_up;
-    set_metadata(o, s, r, is_exr, trace_s, &o->write, title, sizeof title, software,
+    set_metadata(o, path, s, r, is_exr, trace_s, &o->write, title, sizeof title, software,
                  sizeof software, settings, sizeof settings);
     if (image_write_ex(&b->img, output, &o->write, err, sizeof err) != 0) {
         fail_msg(bar, err);
         return 1;
     }
     t->written = sys_now();
-    report(o, s, r, output, t, &st, trace_s);
+    report(o, &b->img, s, r, output, t, &st, trace_s);
     return summary_written();
 }
 
-/* Loads the scene while OpenCL starts, renders it, and ends the process (see
- * CW_FULL_TEARDOWN). Errors come in the order of the steps: the scene's, then the
- * device's. Returns the exit status. */
+/* The output of scene k (o->output, or the scene's NAME.exr) into b->default_out, checked
+ * before the scene is read: a render that cannot be saved is not started. Returns 0, or -1
+ * after printing the error. */
+static int check_output(const cli_options *o, int k, batch *b, progress_bar *bar)
+{
+    char err[2048];
+    free(b->default_out);
+    b->default_out = NULL;
+    if (!o->output && !(b->default_out = default_output(o->scenes[k]))) {
+        fail_msg(bar, "out of memory");
+        return -1;
+    }
+    if (sys_check_output(o->output ? o->output : b->default_out, err, sizeof err) != 0) {
+        fail_msg(bar, err);
+        return -1;
+    }
+    return 0;
+}
+
+/* Loads the first scene while OpenCL starts, renders it, then each further scene in turn
+ * on the same device (a failed one is reported and the others still render), and ends the
+ * process (see CW_FULL_TEARDOWN). Errors come in the order of the steps: the scene's, then
+ * the device's. Returns the exit status: the worst of the scenes'. */
 static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
 {
     char err[2048];
     scene_job load;
     batch b;
-    int rc = 1;
+    int rc = 0, one, k;
 
     memset(&b, 0, sizeof b);
     scene_init(&b.s);
-    /* the output's place first: a render that cannot be saved is not started */
-    if (!o->output && !(b.default_out = default_output(o->scene))) {
-        fail_msg(bar, "out of memory");
-        return 1;
-    }
-    if (sys_check_output(o->output ? o->output : b.default_out, err, sizeof err) != 0) {
-        fail_msg(bar, err);
+    if (check_output(o, 0, &b, bar) != 0) {
         free(b.default_out);
         return 1;
     }
     progress_status(bar, "loading the scene ...");
-    scene_job_begin(&load, o, &b.s);
+    scene_job_begin(&load, o, o->scenes[0], &b.s);
     if (load.threaded || load.rc == 0) /* without a thread, a failed load ends it here */
         b.r_rc = renderer_create(&b.r, o->device, b.r_err, sizeof b.r_err) == 0 &&
                          renderer_set_settings(b.r, &o->settings, b.r_err, sizeof b.r_err) == 0
                      ? 0
                      : -1;
     t->opencl = sys_now() - t->start;
-    if (scene_job_end(&load) != 0) {
-        fail_msg(bar, load.err);
-    } else {
-        t->loaded = load.done_at;
-        progress_clear(bar);
-        rc = render_batch(o, &b, bar, t);
+    for (k = 0; k < o->nscenes; k++) {
+        if (k > 0) {
+            scene_free(&b.s);
+            scene_init(&b.s);
+            t->start = sys_now();
+            t->opencl = 0;
+        }
+        if (k == 0 ? scene_job_end(&load) != 0
+            : check_output(o, k, &b, bar) != 0
+                ? (err[0] = '\0', 1)
+                : load_scene(o, o->scenes[k], &b.s, err, sizeof err) != 0) {
+            if (k == 0 || err[0])
+                fail_msg(bar, k == 0 ? load.err : err);
+            one = 1;
+        } else {
+            t->loaded = k == 0 ? load.done_at : sys_now();
+            progress_clear(bar);
+            one = render_batch(o, o->scenes[k], &b, bar, t);
+        }
+        if (one > rc)
+            rc = one;
+        if (b.r_rc != 0) /* no device: nothing more can render */
+            break;
     }
     if (rc == 0 && !CW_FULL_TEARDOWN)
         sys_exit_now(0);
@@ -314,16 +368,32 @@ static int run_preview(const cli_options *o, progress_bar *bar)
 
     scene_init(&s);
     progress_status(bar, "loading the scene ...");
-    if (load_scene(o, &s, err, sizeof err) != 0) {
+    if (load_scene(o, o->scene, &s, err, sizeof err) != 0) {
         fail_msg(bar, err);
         rc = 1;
     } else {
-        preview_options po = {o->device, o->settings, o->preview_script, o->quiet};
+        preview_options po = {o->device, o->settings, o->preview_script, o->quiet, o->scene};
         progress_clear(bar);
         rc = preview_run(&s, &po);
     }
     scene_free(&s);
     return rc;
+}
+
+/* --threads N: PoCL's CPU device (read when OpenCL starts), the BVH build and the image
+ * writers. Returns 0, or -1 after printing an error. */
+static int set_threads(int n)
+{
+    char v[16];
+    if (n <= 0)
+        return 0;
+    snprintf(v, sizeof v, "%d", n);
+    if (setenv("POCL_MAX_PTHREAD_COUNT", v, 1) != 0) {
+        perror("clwhitted: setenv");
+        return -1;
+    }
+    sys_set_cpu_limit(n);
+    return 0;
 }
 
 int main(int argc, char **argv)
@@ -337,6 +407,8 @@ int main(int argc, char **argv)
     if (cli_parse(argc, argv, &o, &rc) != CLI_RUN)
         return rc;
     sys_signals_install();
+    if (set_threads(o.threads) != 0)
+        return 1;
     if (o.list_devices) {
         if (renderer_list_devices(err, sizeof err) != 0) {
             fprintf(stderr, "clwhitted: %s\n", sys_escape(shown, sizeof shown, err));
@@ -344,8 +416,7 @@ int main(int argc, char **argv)
         }
         return summary_written();
     }
-    progress_init(&bar, stderr,
-                  progress_wanted(o.quiet, getenv("CLWHITTED_PROGRESS"), isatty(STDERR_FILENO)));
+    progress_init(&bar, stderr, progress_wanted(o.quiet, o.progress, isatty(STDERR_FILENO)));
     t.start = sys_now();
     return o.preview ? run_preview(&o, &bar) : run_batch(&o, &bar, &t);
 }

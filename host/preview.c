@@ -20,6 +20,7 @@
 #include "image.h"
 #include "preview.h"
 #include "preview_display.h"
+#include "preview_export.h"
 #include "preview_glfw.h"
 #include "preview_input.h"
 #include "preview_script.h"
@@ -257,23 +258,27 @@ static void update_title(pv *p, int force)
              p->s->name ? p->s->name : "scene", viewcam_projection_name(p->view.vc.cam.projection),
              p->view.depth, state, st->frame_s * 1e3, st->last_batch_s * 1e3, st->mrays);
     p->win.glfw.SetWindowTitle(p->win.win, title);
+    snprintf(title, sizeof title, "%s, depth %d, %s\n%.2f Mrays/s, %.1f ms/frame",
+             viewcam_projection_name(p->view.vc.cam.projection), p->view.depth, state, st->mrays,
+             st->frame_s * 1e3); /* the same, with the camera and the keys, over the picture */
+    pvd_overlay(&p->disp, p->in.overlay, title, &p->view.vc.cam, pvi_overlay_keys);
 }
 
 /* ---- saving ----------------------------------------------------------------------- */
 
 static int write_both(pv *p, const image *img, const char *prefix)
 {
-    char path[4096];
-    snprintf(path, sizeof path, "%s.exr", prefix);
-    if (image_write(img, path, p->err, sizeof p->err) != 0)
-        return -1;
-    snprintf(path, sizeof path, "%s.png", prefix);
-    if (image_write(img, path, p->err, sizeof p->err) != 0)
+    pve_meta m = {p->opt->scene_path ? p->opt->scene_path : "scene",
+                  renderer_device_name(p->r),
+                  p->view.depth,
+                  p->sched.stage == ST_DONE ? p->sched.spp : p->sched.sample,
+                  p->sched.spp,
+                  p->opt->settings.precision == RENDER_FAST};
+    if (pve_save_images(img, prefix, &m, p->err, sizeof p->err) != 0)
         return -1;
     if (!p->opt->quiet)
         printf("clwhitted: saved %s.exr and %s.png (%dx%d, %d/%d samples)\n", prefix, prefix,
-               img->width, img->height, p->sched.stage == ST_DONE ? p->sched.spp : p->sched.sample,
-               p->sched.spp);
+               img->width, img->height, m.samples, m.spp);
     return 0;
 }
 
@@ -320,6 +325,8 @@ static void cb_key(GLFWwindow *w, int key, int scancode, int action, int mods)
     pv *p = pvg_user(w);
     (void)scancode;
     pvi_key(&p->view, &p->in, key, action, mods);
+    if (p->in.overlay_changed && !(p->in.overlay_changed = 0)) /* H: shown at once */
+        update_title(p, 1), pvd_draw(&p->disp, &p->win, 1, p->err, sizeof p->err);
 }
 
 static void cb_button(GLFWwindow *w, int button, int action, int mods)
@@ -497,6 +504,12 @@ static int run_loop(pv *p)
         p->last_loop = t;
         if (apply_size(p) != 0 || (scripted && script_step(p) != 0))
             return -1;
+        if (p->in.camera) { /* a failure to write the file is said, and the preview goes on */
+            p->in.camera = 0;
+            if (pve_export_camera(&p->view.vc, p->view.depth, p->sched.spp, p->opt->scene_path,
+                                  stdout, p->err, sizeof p->err) != 0)
+                fprintf(stderr, "clwhitted: %s\n", p->err);
+        }
         if (p->in.quit)
             break;
         if (!scripted)

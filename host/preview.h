@@ -11,6 +11,7 @@ typedef struct {
     render_settings settings; /* settings.spp > 1: samples to accumulate, else 16 */
     const char *script;       /* test option: a file of scripted input, or NULL */
     int quiet;                /* print nothing but errors */
+    const char *scene_path;   /* the scene file (the C key writes its camera file beside it) */
 } preview_options;
 
 /* Opens a window showing the finished scene s as it renders, with camera controls, until

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "preview_display.h"
+#include "preview_font.h"
 #include "sys.h"
 
 void pvd_init(pvd_display *d)
@@ -18,6 +19,8 @@ void pvd_init(pvd_display *d)
 
 void pvd_free(pvd_display *d)
 {
+    free(d->scratch);
+    d->scratch = NULL;
     free(d->px);
     d->px = NULL;
 }
@@ -86,9 +89,50 @@ void pvd_paint(pvd_display *d, const image *img, int rows)
     }
 }
 
+void pvd_overlay(pvd_display *d, int on, const char *status, const scene_camera *c,
+                 const char *keys)
+{
+    if (!on)
+        d->overlay[0] = '\0';
+    else
+        snprintf(d->overlay, sizeof d->overlay, "%s\neye %.3g %.3g %.3g\nview %.3g %.3g %.3g\n%s",
+                 status, c->eye.x, c->eye.y, c->eye.z, -c->w.x, -c->w.y, -c->w.z, keys);
+}
+
+/* The overlay's lines into buf (w x h, bottom row first) from the top left: each line on
+ * a box of the picture at half brightness, its glyphs in white. */
+static void draw_text(unsigned char *buf, int w, int h, const char *text)
+{
+    int top = 2, x, y, k;
+    const char *line = text;
+    while (*line && top + PVF_H <= h) {
+        int n = (int)strcspn(line, "\n"), right = 2 + PVF_W * n + 2;
+        if (right > w)
+            right = w;
+        for (y = top - 1; y < top + PVF_H && y < h; y++)
+            for (x = 0; x < right; x++) {
+                unsigned char *q = buf + 3 * ((size_t)(h - 1 - y) * w + x);
+                q[0] /= 2, q[1] /= 2, q[2] /= 2;
+            }
+        for (k = 0; k < n && 2 + PVF_W * (k + 1) <= w; k++) {
+            int c = (unsigned char)line[k];
+            const unsigned char *g =
+                pvf_glyphs[(c < PVF_FIRST || c > PVF_LAST ? '?' : c) - PVF_FIRST];
+            for (y = 0; y < PVF_H; y++)
+                for (x = 0; x < PVF_W; x++)
+                    if (g[y] & (1 << (PVF_W - 1 - x)))
+                        memset(buf + 3 * ((size_t)(h - 1 - (top + y)) * w + 2 + PVF_W * k + x), 255,
+                               3);
+        }
+        top += PVF_H + 1;
+        line += n + (line[n] == '\n');
+    }
+}
+
 int pvd_draw(pvd_display *d, pvg_window *w, int swap, char *err, size_t errlen)
 {
     const pvg_gl *gl = &w->gl;
+    const unsigned char *shown = d->px;
     gl->Viewport(0, 0, w->fb_w, w->fb_h);
     gl->ClearColor(0.0f, 0.0f, 0.0f, 1.0f);
     gl->Clear(PVG_GL_COLOR_BUFFER_BIT);
@@ -98,7 +142,17 @@ int pvd_draw(pvd_display *d, pvg_window *w, int swap, char *err, size_t errlen)
         else
             gl->RasterPos2f(-1.0f, -1.0f);
         gl->PixelStorei(PVG_GL_UNPACK_ALIGNMENT, 1);
-        gl->DrawPixels(d->w, d->h, PVG_GL_RGB, PVG_GL_UNSIGNED_BYTE, d->px);
+        if (d->overlay[0]) {
+            size_t n = 3 * (size_t)d->w * (size_t)d->h;
+            unsigned char *s = realloc(d->scratch, n);
+            if (s) { /* without memory the picture is shown without the overlay */
+                d->scratch = s;
+                memcpy(s, d->px, n);
+                draw_text(s, d->w, d->h, d->overlay);
+                shown = s;
+            }
+        }
+        gl->DrawPixels(d->w, d->h, PVG_GL_RGB, PVG_GL_UNSIGNED_BYTE, shown);
     }
     if (pvg_gl_check(w, "glDrawPixels", err, errlen))
         return -1;

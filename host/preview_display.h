@@ -8,12 +8,15 @@
 
 #include "image.h"
 #include "preview_glfw.h"
+#include "scene.h"
 
 typedef struct {
     unsigned char *px; /* 8-bit sRGB, bottom row first, w x h; NULL: none yet */
     int w, h;
-    double last;     /* when it was last drawn (sys_now) */
-    double thr[256]; /* thr[c]: the smallest linear value with code >= c */
+    char overlay[1024];     /* text drawn over the picture (lines split by '\n'); "": none */
+    unsigned char *scratch; /* the picture with the overlay, as drawn */
+    double last;            /* when it was last drawn (sys_now) */
+    double thr[256];        /* thr[c]: the smallest linear value with code >= c */
 } pvd_display;
 
 /* An empty display; pvd_free releases its buffer. */
@@ -27,8 +30,14 @@ int pvd_resize(pvd_display *d, int w, int h, char *err, size_t errlen);
 /* Paints the top `rows` rows of img (any size: scaled, nearest) into the buffer. */
 void pvd_paint(pvd_display *d, const image *img, int rows);
 
-/* Draws the buffer into the window's back buffer, and swaps if `swap`. Returns 0, or -1
- * with err (an OpenGL error). */
+/* Sets the overlay (on: the status lines, the camera's eye and view direction, and the
+ * keys; off: none). */
+void pvd_overlay(pvd_display *d, int on, const char *status, const scene_camera *c,
+                 const char *keys);
+
+/* Draws the buffer into the window's back buffer, with the overlay text at the top left
+ * (white on a darkened box; the buffer itself is left alone), and swaps if `swap`. Returns
+ * 0, or -1 with err (an OpenGL error). */
 int pvd_draw(pvd_display *d, pvg_window *w, int swap, char *err, size_t errlen);
 
 /* Grabs what the window shows and writes it to path (.png: the 8-bit values as shown;

@@ -18,8 +18,15 @@ static const char help_text[] =
     "  P                  projection: perspective -> orthographic -> oblique\n"
     "  + or ]  /  - or [  maximum depth up / down\n"
     "  F5 or Ctrl+S       save the image as NAME-preview-DATE-TIME.exr and .png\n"
-    "  H or F1            this help\n"
+    "  C                  print the camera as a batch command line, and write it to\n"
+    "                     NAME-camera.json beside the scene (clwhitted --camera FILE)\n"
+    "  H or F1            the overlay on or off (keys, samples, rate, camera), and this\n"
+    "                     help\n"
     "  Esc or Ctrl+Q      quit\n";
+
+const char pvi_overlay_keys[] = "drag orbit, right drag pan, wheel zoom, WASDQE fly\n"
+                                "R reset, P projection, +/- depth, F5 save, C camera\n"
+                                "H hide this, Esc quit";
 
 void pvi_key(pvi_view *v, pvi_input *in, int key, int action, int mods)
 {
@@ -67,10 +74,20 @@ void pvi_key(pvi_view *v, pvi_input *in, int key, int action, int mods)
         if (action == GLFW_PRESS && (key == GLFW_KEY_F5 || ctrl))
             in->save = 1;
         break;
+    case GLFW_KEY_C:
+        if (action == GLFW_PRESS && !ctrl)
+            in->camera = 1;
+        break;
     case GLFW_KEY_H:
     case GLFW_KEY_F1:
-        if (action == GLFW_PRESS && !ctrl)
-            fputs(help_text, stdout);
+        if (action == GLFW_PRESS && !ctrl) {
+            in->overlay = !in->overlay;
+            in->overlay_changed = 1;
+            if (in->overlay) {
+                fputs(help_text, stdout);
+                fflush(stdout);
+            }
+        }
         break;
     default:
         break;

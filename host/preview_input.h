@@ -17,11 +17,17 @@ typedef struct {
 enum { PVI_DRAG_NONE, PVI_DRAG_ORBIT, PVI_DRAG_PAN };
 
 typedef struct {
-    int drag;      /* PVI_DRAG_* */
-    double mx, my; /* the pointer's last position, window coordinates */
-    int save;      /* a save was asked for (F5, Ctrl+S) and is not done yet */
-    int quit;      /* Esc, Ctrl+Q, or the end of the test script */
+    int drag;            /* PVI_DRAG_* */
+    double mx, my;       /* the pointer's last position, window coordinates */
+    int save;            /* a save was asked for (F5, Ctrl+S) and is not done yet */
+    int camera;          /* the camera was asked for (C) and is not printed yet */
+    int overlay;         /* H: the overlay (keys, samples, rate, camera) is on */
+    int overlay_changed; /* H was pressed: the preview redraws */
+    int quit;            /* Esc, Ctrl+Q, or the end of the test script */
 } pvi_input;
+
+/* The keys, short, for the overlay (lines split by '\n'). */
+extern const char pvi_overlay_keys[];
 
 /* The window's key, mouse button, pointer motion and wheel events (GLFW's arguments).
  * The pan of a drag is scaled from window coordinates to framebuffer pixels of w. */

@@ -9,21 +9,33 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include "config.h"
 #include "sys.h"
 
 #define REDRAW_S 0.1 /* at most ten redraws a second */
 #define BAR_MIN 10
 #define BAR_MAX 40
 
-int progress_wanted(int quiet, const char *env, int is_tty)
+int progress_mode_parse(const char *env)
 {
-    if (quiet)
+    if (!env || !*env || strcmp(env, "auto") == 0)
+        return PROGRESS_AUTO;
+    if (strcmp(env, "always") == 0 || strcmp(env, "1") == 0)
+        return PROGRESS_ALWAYS;
+    if (strcmp(env, "never") == 0 || strcmp(env, "0") == 0)
+        return PROGRESS_NEVER;
+    if (strcmp(env, "log") == 0)
+        return PROGRESS_LOG;
+    return -1;
+}
+
+int progress_wanted(int quiet, int mode, int is_tty)
+{
+    if (quiet || mode == PROGRESS_NEVER)
         return 0;
-    if (env && (strcmp(env, "always") == 0 || strcmp(env, "1") == 0))
-        return 1;
-    if (env && (strcmp(env, "never") == 0 || strcmp(env, "0") == 0))
-        return 0;
-    return is_tty != 0;
+    if (mode == PROGRESS_LOG)
+        return PROGRESS_LOG;
+    return mode == PROGRESS_ALWAYS || is_tty != 0;
 }
 
 static int terminal_columns(FILE *out)
@@ -42,10 +54,11 @@ void progress_init(progress_bar *p, FILE *out, int enabled)
     memset(p, 0, sizeof *p);
     p->out = out;
     p->enabled = enabled && out;
-    p->columns = p->enabled ? terminal_columns(out) : 80;
+    p->log = p->enabled && enabled == PROGRESS_LOG;
+    p->columns = p->enabled && !p->log ? terminal_columns(out) : 80;
     p->t0 = sys_now();
     p->last = -1.0;
-    p->interval = REDRAW_S;
+    p->interval = p->log ? CW_PROGRESS_LOG_S : REDRAW_S;
 }
 
 /* Replaces the line with `text`, padding over what was there. */
@@ -64,7 +77,7 @@ void progress_status(progress_bar *p, const char *msg)
 {
     char line[512];
     size_t max;
-    if (!p->enabled)
+    if (!p->enabled || p->log)
         return;
     max = (size_t)p->columns - 1 < sizeof line ? (size_t)p->columns - 1 : sizeof line - 1;
     snprintf(line, max + 1, "%s", msg);
@@ -154,7 +167,18 @@ int progress_update(void *ctx, double fraction, unsigned long long rays)
     t = sys_now();
     if (p->last >= 0 && t - p->last < p->interval)
         return 0;
+    if (p->log && p->last < 0) { /* the first line after CW_PROGRESS_LOG_S, not at 0 % */
+        p->last = t;
+        return 0;
+    }
     p->last = t;
+    if (p->log) {
+        char text[160];
+        progress_format(text, sizeof text, 1 << 20, fraction, rays, t - p->t0);
+        fprintf(p->out, "clwhitted: %s\n", strchr(text, ']') ? strchr(text, ']') + 2 : text);
+        fflush(p->out);
+        return 0;
+    }
     progress_format(line, sizeof line, p->columns, fraction, rays, t - p->t0);
     draw(p, line);
     return 0;

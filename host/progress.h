@@ -14,14 +14,23 @@ typedef struct {
     double last;     /* time of the last redraw; < 0: none yet */
     double interval; /* least time between redraws in seconds (0.1) */
     size_t drawn;    /* characters now on the line (0: the line is clear) */
+    int log;         /* log lines instead of a bar: never redrawn in place */
 } progress_bar;
 
-/* Whether to show the bar: never with --quiet; else CLWHITTED_PROGRESS decides when set
- * ("always"/"1": even when not a terminal; "never"/"0": never), otherwise only when the
- * output is a terminal. env: the value of CLWHITTED_PROGRESS, or NULL. */
-int progress_wanted(int quiet, const char *env, int is_tty);
+/* Progress modes (CLWHITTED_PROGRESS). */
+#define PROGRESS_AUTO 0   /* unset or "auto": a bar when the output is a terminal */
+#define PROGRESS_ALWAYS 1 /* "always" or "1": a bar even when it is not */
+#define PROGRESS_NEVER 2  /* "never" or "0" */
+#define PROGRESS_LOG 3    /* "log": a plain line every CW_PROGRESS_LOG_S seconds */
+/* The mode of CLWHITTED_PROGRESS's value (NULL or "": auto), or -1 if it is none. */
+int progress_mode_parse(const char *env);
 
-/* Prepares a bar on `out` (shown only when enabled). Nothing is drawn yet. */
+/* What to show: 0 (nothing), 1 (the bar) or PROGRESS_LOG (lines): nothing with --quiet;
+ * else by mode, auto showing the bar only when the output is a terminal. */
+int progress_wanted(int quiet, int mode, int is_tty);
+
+/* Prepares a bar on `out` (shown only when enabled; enabled == PROGRESS_LOG: log lines).
+ * Nothing is drawn yet. */
 void progress_init(progress_bar *p, FILE *out, int enabled);
 /* Shows a one-line status message (e.g. while kernels compile) until the next draw. */
 void progress_status(progress_bar *p, const char *msg);

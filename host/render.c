@@ -273,8 +273,9 @@ static void fill_view(cw_frame *f, const scene *s)
     f->projection = c->projection == SCENE_ORTHOGRAPHIC ? CW_PROJ_ORTHOGRAPHIC
                     : c->projection == SCENE_OBLIQUE    ? CW_PROJ_OBLIQUE
                                                         : CW_PROJ_PERSPECTIVE;
-    f->nx = s->width;
-    f->ny = s->height;
+    f->nx = f->cam_nx = s->width;
+    f->ny = f->cam_ny = s->height;
+    f->cam_x0 = f->cam_y0 = 0;
     f->max_depth = s->max_depth;
 }
 
@@ -410,18 +411,21 @@ static int trace_all(renderer *r, int spp, char *err, size_t errlen)
 
 /* The SPD procedure: rays through the (nx+1) x (ny+1) pixel corners, the four corners of
  * each pixel averaged. The corners are the centres of an (nx+1) x (ny+1) image whose
- * window is half a pixel wider on every side. */
+ * window is half a pixel wider on every side (of a crop: the corners of its pixels in
+ * the full image's grid of corners). */
 static int render_spd(renderer *r, image *img, char *err, size_t errlen)
 {
     cw_frame saved = r->host_frame;
     cw_frame *f = &r->host_frame;
-    float pu = (saved.window.y - saved.window.x) / (float)saved.nx;
-    float pv = (saved.window.w - saved.window.z) / (float)saved.ny;
+    float pu = (saved.window.y - saved.window.x) / (float)saved.cam_nx;
+    float pv = (saved.window.w - saved.window.z) / (float)saved.cam_ny;
     float *px = NULL;
     int i, j, rc = -1, cx = saved.nx + 1;
 
     f->nx = saved.nx + 1;
     f->ny = saved.ny + 1;
+    f->cam_nx = saved.cam_nx + 1;
+    f->cam_ny = saved.cam_ny + 1;
     f->window.x = saved.window.x - 0.5f * pu;
     f->window.y = saved.window.y + 0.5f * pu;
     f->window.z = saved.window.z - 0.5f * pv;
@@ -452,14 +456,68 @@ out_restore:
     return rc;
 }
 
+int render_check_crop(const render_settings *st, int width, int height, char *err, size_t errlen)
+{
+    const int *c = st->crop;
+    if (c[1] == 0)
+        return 0;
+    if (c[0] < 0 || c[0] >= c[1] || c[1] > width || c[2] < 0 || c[2] >= c[3] || c[3] > height) {
+        snprintf(err, errlen,
+                 "--crop %d,%d,%d,%d is not inside the %dx%d image (X0 < X1 <= %d, Y0 < Y1 <= %d)",
+                 c[0], c[1], c[2], c[3], width, height, width, height);
+        return -1;
+    }
+    return 0;
+}
+
+/* Traces one row once and clears the accumulation image: the first launch, where a driver
+ * may compile the kernel for the device, timed apart (stats.warmup_s). No progress
+ * report, and the counts are reset by the caller. */
+static int warm_up(renderer *r, char *err, size_t errlen)
+{
+    render_progress_fn fn = r->progress;
+    double t0 = sys_now();
+    int rc;
+    r->progress = NULL;
+    rc = rpass_trace_band(r, 0, 0, 1, 0.0, 0.0, err, errlen);
+    r->progress = fn;
+    if (rc == 0) {
+        cl_int e = clFinish(r->queue);
+        if (e != CL_SUCCESS)
+            return rpass_fail(e, "clFinish", r, err, errlen);
+    }
+    r->stats.warmup_s = sys_now() - t0;
+    return rc;
+}
+
+/* The frame of settings.crop's window of the full frame f (see cw_frame). */
+static void crop_frame(cw_frame *f, const int *crop)
+{
+    f->cam_x0 = crop[0];
+    f->cam_y0 = f->cam_ny - crop[3];
+    f->nx = crop[1] - crop[0];
+    f->ny = crop[3] - crop[2];
+}
+
 int renderer_render(renderer *r, image *img, char *err, size_t errlen)
 {
-    int spp = r->settings.spp < 1 ? 1 : r->settings.spp, rc;
+    int spp = r->settings.spp < 1 ? 1 : r->settings.spp, rc = -1;
+    cw_frame full = r->host_frame;
+    char restore_err[256];
     double t0;
 
     if (rpass_need_scene(r, err, errlen) ||
-        renderer_ensure_program(r, renderer_strategy(r), err, errlen))
+        renderer_ensure_program(r, renderer_strategy(r), err, errlen) ||
+        render_check_crop(&r->settings, full.cam_nx, full.cam_ny, err, errlen))
         return -1;
+    if (r->settings.crop[1] != 0) {
+        crop_frame(&r->host_frame, r->settings.crop);
+        if (write_frame(r, err, errlen) != 0)
+            goto out_restore;
+    }
+    rc = warm_up(r, err, errlen);
+    if (rc != 0)
+        goto out_restore;
     t0 = sys_now();
     r->stats.eye_rays = r->stats.eye_hits = 0;
     r->stats.shadow_rays = r->stats.shadow_blocked = 0;
@@ -472,6 +530,14 @@ int renderer_render(renderer *r, image *img, char *err, size_t errlen)
     else
         rc = trace_all(r, spp, err, errlen) || renderer_read(r, img, err, errlen) ? -1 : 0;
     r->stats.trace_s = sys_now() - t0;
+    if (r->settings.crop[1] == 0)
+        return rc;
+out_restore:
+    r->host_frame = full;
+    if (rc == 0)
+        rc = write_frame(r, err, errlen) != 0 ? -1 : 0;
+    else
+        write_frame(r, restore_err, sizeof restore_err); /* the first error is the one */
     return rc;
 }
 
@@ -542,6 +608,15 @@ int render_strategy_parse(const char *name)
         if (strcmp(name, strategy_names[k]) == 0)
             return k;
     return -1;
+}
+
+int renderer_compute_units(const renderer *r)
+{
+    cl_uint units = 0;
+    if (clGetDeviceInfo(r->device, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units, NULL) !=
+        CL_SUCCESS)
+        return 0;
+    return (int)units;
 }
 
 void renderer_get_stats(const renderer *r, render_stats *st)

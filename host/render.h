@@ -20,6 +20,8 @@ int renderer_list_devices(char *err, size_t errlen);
 int renderer_create(renderer **out, const char *spec, char *err, size_t errlen);
 void renderer_destroy(renderer *r);
 const char *renderer_device_name(const renderer *r);
+/* The device's compute units (PoCL's CPU device: its threads), or 0 if unknown. */
+int renderer_compute_units(const renderer *r);
 
 /* Uploads a finished scene (see scene_finish) and builds the kernels for its features. */
 int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen);
@@ -47,6 +49,10 @@ typedef struct {
                     * four corners averaged per pixel (spp is then ignored) */
     int stats;     /* count rays on the device (compiled in only when set) */
     int strategy;  /* RENDER_AUTO (default), RENDER_WAVEFRONT or RENDER_PIXEL */
+    int crop[4];   /* x0, x1, y0, y1: renderer_render renders only the pixels x0..x1-1,
+                    * y0..y1-1 (row 0 at the top) of the full image, exactly as the full
+                    * render gives them, into an (x1-x0) x (y1-y0) image; crop[1] == 0:
+                    * the whole image. Checked against the image by renderer_set_scene. */
 } render_settings;
 
 void render_settings_default(render_settings *st);
@@ -59,6 +65,9 @@ const char *render_strategy_name(int strategy);
 /* "auto", "wavefront", "pixel" -> RENDER_*, or -1. */
 int render_strategy_parse(const char *name);
 
+/* Checks a crop window against a width x height image. Returns 0, or -1 with err. */
+int render_check_crop(const render_settings *st, int width, int height, char *err, size_t errlen);
+
 /* Ray counts (when settings.stats) and times of the last renderer_set_scene and
  * renderer_render, in seconds. */
 typedef struct {
@@ -67,6 +76,9 @@ typedef struct {
     unsigned long long secondary_rays, secondary_hits;
     double build_s;   /* acceleration structure build on the host */
     double compile_s; /* kernel program build (0 when the program was already built) */
+    double warmup_s;  /* renderer_render's first launch on one row, before the clock of
+                       * trace_s starts: where a driver compiles the kernel for the device
+                       * (PoCL does) */
     double upload_s;  /* buffer creation and upload */
     double trace_s;   /* last renderer_render */
     int passes;       /* ray-tree levels traced by the last render, summed over its bands

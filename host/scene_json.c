@@ -48,6 +48,7 @@ typedef struct {
     scene *s;
     mat_entry *mats; /* material names, sorted */
     size_t nmats;
+    int camera_only; /* a camera file (--camera): "image", "max_depth" and "camera" only */
 } jreader;
 
 /* ---- sections ------------------------------------------------------------------------------ */
@@ -475,15 +476,19 @@ static int read_scene(jreader *r, const cJSON *root)
 {
     static const char *const keys[] = {"image",     "max_depth", "background", "ambient", "camera",
                                        "materials", "lights",    "objects",    NULL};
+    static const char *const camera_keys[] = {"image", "max_depth", "camera", NULL};
     const cJSON *m;
     scene *s = r->s;
     if (!cJSON_IsObject(root))
         return jv_fail(&r->doc, root, "expected a JSON object at the top level, found %s",
                        jv_type_name(root));
-    if (jv_check_object(&r->doc, root, "scene", keys) != 0)
+    if (jv_check_object(&r->doc, root, r->camera_only ? "camera file" : "scene",
+                        r->camera_only ? camera_keys : keys) != 0)
         return -1;
-    s->width = 640;
-    s->height = 480;
+    if (!r->camera_only) {
+        s->width = 640;
+        s->height = 480;
+    }
     if ((m = jv_member(root, "image")) && read_image(r, m) != 0)
         return -1;
     if ((m = jv_member(root, "max_depth")) &&
@@ -537,8 +542,8 @@ static long deepest_nesting(const char *text, const char *end)
 
 /* ---- entry points -------------------------------------------------------------------------- */
 
-/* A scene_text_parser: parses buf[0..len). */
-static int parse_buffer(char *buf, size_t len, const scene_msg *msg, scene *s)
+/* Parses buf[0..len): a scene, or a camera file. */
+static int parse_any(char *buf, size_t len, const scene_msg *msg, scene *s, int camera_only)
 {
     jreader r;
     cJSON *root;
@@ -549,6 +554,7 @@ static int parse_buffer(char *buf, size_t len, const scene_msg *msg, scene *s)
     r.doc.len = len;
     r.doc.msg = msg;
     r.s = s;
+    r.camera_only = camera_only;
     for (p = buf; p < buf + len && (unsigned char)*p <= 32; p++)
         ;
     if (p == buf + len)
@@ -580,6 +586,37 @@ static int parse_buffer(char *buf, size_t len, const scene_msg *msg, scene *s)
     rc = read_scene(&r, root);
     free(r.mats);
     cJSON_Delete(root);
+    return rc;
+}
+
+/* scene_text_parsers: a scene, a camera file. */
+static int parse_buffer(char *buf, size_t len, const scene_msg *msg, scene *s)
+{
+    return parse_any(buf, len, msg, s, 0);
+}
+
+static int parse_camera_buffer(char *buf, size_t len, const scene_msg *msg, scene *s)
+{
+    return parse_any(buf, len, msg, s, 1);
+}
+
+int json_camera_load(const char *path, scene *s, char *err, size_t errlen)
+{
+    scene cam;
+    int rc;
+    scene_init(&cam);
+    cam.width = cam.height = cam.max_depth = 0;
+    rc = scene_parse_file(parse_camera_buffer, path, &cam, err, errlen);
+    if (rc == 0) {
+        s->camera = cam.camera;
+        if (cam.width > 0)
+            s->width = cam.width;
+        if (cam.height > 0)
+            s->height = cam.height;
+        if (cam.max_depth > 0)
+            s->max_depth = cam.max_depth;
+    }
+    scene_free(&cam);
     return rc;
 }
 

@@ -13,4 +13,10 @@ int json_scene_load(const char *path, scene *s, char *err, size_t errlen);
 int json_scene_parse(const char *text, size_t len, const char *name, scene *s, char *err,
                      size_t errlen);
 
+/* Reads a camera file (clwhitted --camera; the preview's C key writes one): a JSON object
+ * with "camera" as in a scene, and optionally "image" and "max_depth", and puts them into
+ * s (before scene_finish), leaving the rest of s alone. Returns 0, or -1 with
+ * "path:line: message" in err. */
+int json_camera_load(const char *path, scene *s, char *err, size_t errlen);
+
 #endif

@@ -7,6 +7,15 @@
 #include "scene_nff.h"
 #include "sys.h"
 
+int scene_load_camera(const char *path, scene *s, char *err, size_t errlen)
+{
+    if (!sys_has_ext(path, ".json")) {
+        snprintf(err, errlen, "%s: a camera file is JSON (expected a .json file)", path);
+        return -1;
+    }
+    return json_camera_load(path, s, err, errlen);
+}
+
 int scene_load(const char *path, scene *s, char *err, size_t errlen)
 {
     if (sys_has_ext(path, ".json"))

@@ -11,4 +11,8 @@
  * or -1 with "file:line: message" in err. */
 int scene_load(const char *path, scene *s, char *err, size_t errlen);
 
+/* Reads a camera file (--camera, json_camera_load) into a loaded scene s. Returns 0, or -1
+ * with "file:line: message" in err. */
+int scene_load_camera(const char *path, scene *s, char *err, size_t errlen);
+
 #endif

@@ -27,7 +27,14 @@ double sys_now(void)
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
-int sys_cpu_count(void)
+static int sys_cpu_limit; /* 0: none */
+
+void sys_set_cpu_limit(int n)
+{
+    sys_cpu_limit = n > 0 ? n : 0;
+}
+
+static int cpu_count(void)
 {
     long n;
 #if defined(__linux__) && defined(CPU_COUNT)
@@ -60,6 +67,12 @@ unsigned long long sys_mem_available(void)
 #endif
     size = sysconf(_SC_PAGESIZE);
     return pages > 0 && size > 0 ? (unsigned long long)pages * (unsigned long long)size : 0;
+}
+
+int sys_cpu_count(void)
+{
+    int n = cpu_count();
+    return sys_cpu_limit > 0 && sys_cpu_limit < n ? sys_cpu_limit : n;
 }
 
 void sys_exit_now(int status)

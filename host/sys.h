@@ -13,6 +13,8 @@ double sys_now(void);
 /* The number of CPUs this process may run on (its affinity mask where the system has
  * one, else the online CPUs; at least 1). */
 int sys_cpu_count(void);
+/* Caps what sys_cpu_count returns at n (n >= 1; --threads); n <= 0 lifts the cap. */
+void sys_set_cpu_limit(int n);
 
 /* The memory available to a new allocation now, in bytes (MemAvailable of /proc/meminfo,
  * else the free pages); 0 when unknown. */

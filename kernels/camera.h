@@ -7,11 +7,15 @@
 
 /* The eye ray through the point (i + sx, j + sy) of pixel (i, j), j counted from the
  * bottom row; (sx, sy) = (0.5, 0.5) is the pixel centre of Shirley & Marschner:
- * u = l + (r-l)(i+0.5)/nx, v = b + (t-b)(j+0.5)/ny. */
+ * u = l + (r-l)(i+0.5)/nx, v = b + (t-b)(j+0.5)/ny. A cropped image's pixel (i, j) is
+ * pixel (i + cam_x0, j + cam_y0) of the full cam_nx x cam_ny image: the same float
+ * operations, so exactly the full render's ray. */
 CW_INLINE cw_ray cam_ray(CW_GLOBAL const cw_frame *f, int i, int j, float sx, float sy)
 {
-    float su = f->window.x + (f->window.y - f->window.x) * ((float)i + sx) / (float)f->nx;
-    float sv = f->window.z + (f->window.w - f->window.z) * ((float)j + sy) / (float)f->ny;
+    float su = f->window.x +
+               (f->window.y - f->window.x) * ((float)(i + f->cam_x0) + sx) / (float)f->cam_nx;
+    float sv = f->window.z +
+               (f->window.w - f->window.z) * ((float)(j + f->cam_y0) + sy) / (float)f->cam_ny;
     vec3 e = v3_from4(f->eye);
     vec3 u = v3_from4(f->u);
     vec3 v = v3_from4(f->v);

@@ -134,9 +134,12 @@ typedef struct {
     int nx, ny;           /* image size in pixels */
     int max_depth;        /* the eye ray is depth 1 */
     int num_lights;
-    int num_nodes; /* BVH nodes; 0: empty scene */
-    int spd_rays;  /* SPD counting: transmitters spawn a reflection ray even when km = 0 */
-    int pad0, pad1, pad2, pad3, pad4, pad5, pad6;
+    int num_nodes;      /* BVH nodes; 0: empty scene */
+    int spd_rays;       /* SPD counting: transmitters spawn a reflection ray even when km = 0 */
+    int cam_nx, cam_ny; /* the full image the camera spans (nx, ny unless cropped) */
+    int cam_x0, cam_y0; /* pixel (0, 0) of this image (counted from the bottom row) is
+                         * pixel (cam_x0, cam_y0) of the full image */
+    int pad0, pad1, pad2;
 } cw_frame;
 
 typedef struct {

@@ -90,21 +90,22 @@ check_grep "--version names the libraries" "libpng .*OpenEXR" "$T/out"
 "$BIN" --help >"$T/out" 2>"$T/err"
 # Every long option --help lists is one clwhitted accepts (not "unrecognized"), and the
 # man page lists it too.
-opts=$(sed -n 's/^ *\(-[A-Za-z], \)\{0,1\}--\([a-z-]*\).*/\2/p' "$T/out")
+opts=$(sed -n 's/^ *\(-[A-Za-z], \)\{0,1\}--\([a-z0-9-]*\).*/\2/p' "$T/out")
 check_true "--help lists the options" test "$(echo "$opts" | wc -l)" -ge 18
 for o in $opts; do
     "$BIN" --$o >/dev/null 2>"$T/opt_err" </dev/null
     check_true "--$o is an option clwhitted knows" sh -c "! grep -q 'unrecognized option' '$T/opt_err'"
     check_true "man page lists --$o" sh -c "tr -d '\\\\' <'$ROOT/docs/clwhitted.1' | grep -q -- '--$o'"
 done
-for o in output width height depth spp precision spd device exposure tonemap half stats quiet; do
+for o in output width height depth spp precision spd device exposure tonemap half stats quiet \
+    threads crop png16; do
     check_true "--help gives the default of --$o" sh -c \
         "sed -n '/--$o /,/default/p' '$T/out' | grep -q '(default: [^)]*)'"
 done
 check_grep "--help: exposure default" "(default: 0)" "$T/out"
 check_grep "--help: tonemap default" "(default: clamp)" "$T/out"
 check_grep "--help: exit status" "Exit status: 0 success, 1 input or render error, 2 usage error" "$T/out"
-for v in CLWHITTED_BUILD_OPTIONS CLWHITTED_PROGRESS POCL_DEVICES POCL_CACHE_DIR; do
+for v in CLWHITTED_BUILD_OPTIONS CLWHITTED_PROGRESS CLWHITTED_SUMMARY POCL_DEVICES POCL_CACHE_DIR; do
     check_grep "--help documents $v" "^  $v " "$T/out"
     check_true "docs/usage.md documents $v" grep -q "^| \`$v\`" "$ROOT/docs/usage.md"
 done
@@ -130,8 +131,93 @@ usage_error "bad exposure" "--exposure expects a number" --exposure bright scene
 usage_error "exposure out of range" "--exposure expects a number in -64..64" --exposure 100 scenes/default.json
 usage_error "bad tonemap" "--tonemap expects 'clamp', 'reinhard' or 'aces', got 'filmic'" --tonemap filmic scenes/default.json
 usage_error "no scene" "no scene file given"
-usage_error "two scenes" "more than one scene file" scenes/default.json scenes/default.json
+usage_error "two scenes with -o" "-o names one image" -o "$T/two.png" scenes/default.json scenes/default.json
 usage_error "bad extension" "unsupported image extension" -o "$T/x.jpg" scenes/default.json
+
+# options that make no sense together, and bad environment values: one line, exit 2
+usage_error "--spd with --spp" "--spd traces the pixel corners: it takes no --spp" --spd --spp 4 scenes/default.json
+usage_error "--spp with --spd" "--spd traces the pixel corners: it takes no --spp" --spp 1 --spd scenes/default.json
+usage_error "--preview --spd" "--spd does not apply to --preview" --preview --spd scenes/default.json
+for o in "-o $T/p.png" "--exposure 1" "--tonemap aces" "--half" "--png16" "--stats" "--crop 0,2,0,2"; do
+    # shellcheck disable=SC2086
+    usage_error "--preview $o" "${o%% *} does not apply to --preview" --preview $o scenes/default.json
+done
+usage_error "--preview with two scenes" "more than one scene does not apply to --preview" --preview scenes/default.json scenes/default.json
+usage_error "empty --device" "--device expects P:D or part of a device name, got ''" --device '' scenes/default.json
+usage_error "--exposure on EXR" "--exposure applies to PNG output" --exposure 1 -o "$T/w.exr" scenes/default.json
+usage_error "--tonemap on the default EXR" "--tonemap applies to PNG output" --tonemap aces scenes/default.json
+usage_error "--png16 on EXR" "--png16 applies to PNG output" --png16 -o "$T/w.exr" scenes/default.json
+usage_error "--half on PNG" "--half applies to EXR output" --half -o "$T/w.png" scenes/default.json
+usage_error "bad --threads" "--threads expects an integer in 1..1024, got '0'" --threads 0 scenes/default.json
+usage_error "bad --crop" "--crop expects X0,X1,Y0,Y1" --crop 1,2,3 scenes/default.json
+usage_error "empty --crop window" "--crop expects X0,X1,Y0,Y1" --crop 4,4,0,2 scenes/default.json
+usage_error "--crop outside the image" "--crop 0,17,0,12 is not inside the 16x12 image" -W 16 -H 12 --crop 0,17,0,12 -o "$T/c.png" scenes/default.json
+check_true "nothing written for a crop outside the image" test ! -e "$T/c.png"
+for v in bogus ALWAYS 2; do
+    CLWHITTED_PROGRESS=$v usage_error "CLWHITTED_PROGRESS=$v" "CLWHITTED_PROGRESS expects 'auto', 'always', 'never' or 'log', got '$v'" -o "$T/e.png" scenes/default.json
+done
+CLWHITTED_PROGRESS= "$BIN" -q -W 8 -H 6 -o "$T/e.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "empty CLWHITTED_PROGRESS is auto" 0 $?
+
+# --threads: the same image with 1 and 2 threads; PoCL's device gets that many compute
+# units (its worker threads)
+IMGTOOL=$(dirname "$BIN")/imgtool
+for n in 1 2; do
+    "$BIN" --stats --threads $n -W 40 -H 30 -o "$T/t$n.exr" scenes/default.json >"$T/out" 2>"$T/err"
+    check "--threads $n" 0 $?
+    check_grep "--threads $n: the device's compute units" "^device: .*, $n compute units\{0,1\}," "$T/out"
+    "$IMGTOOL" raw "$T/t$n.exr" "$T/t$n.raw" >/dev/null 2>"$T/err"
+done
+check_true "--threads 1 and 2: the same pixels" cmp -s "$T/t1.raw" "$T/t2.raw"
+
+# --crop on the command line: the window's pixels of the full render (tests/test_crop.c
+# checks every strategy and mode); the metadata names the crop
+"$BIN" -q -W 40 -H 30 -o "$T/full.exr" scenes/default.json >"$T/out" 2>"$T/err"; check "full render" 0 $?
+"$BIN" -W 40 -H 30 --crop 10,25,4,30 -o "$T/crop.exr" scenes/default.json >"$T/out" 2>"$T/err"
+check "--crop render" 0 $?
+check_grep "--crop: the summary gives the crop's size" "wrote $T/crop.exr (15x26)" "$T/out"
+check_true "--crop: the metadata names the crop" sh -c "tr '\\0' ' ' <'$T/crop.exr' | grep -aq '40x30, crop 10,25,4,30, depth'"
+"$IMGTOOL" convert --crop 10,25,4,30 "$T/full.exr" "$T/fullcut.exr" >"$T/out" 2>"$T/err"
+check "imgtool convert --crop" 0 $?
+"$IMGTOOL" raw "$T/fullcut.exr" "$T/a.raw" >/dev/null 2>&1; "$IMGTOOL" raw "$T/crop.exr" "$T/b.raw" >/dev/null 2>&1
+check_true "--crop: exactly the full render's pixels" cmp -s "$T/a.raw" "$T/b.raw"
+
+# --png16: a 16-bit PNG (tests/test_image.c round-trips the values)
+"$BIN" -q -W 16 -H 12 --png16 -o "$T/p16.png" scenes/default.json >"$T/out" 2>"$T/err"; check "--png16" 0 $?
+check_true "--png16: IHDR says 16 bits" sh -c "od -An -tu1 -j24 -N1 '$T/p16.png' | grep -qw 16"
+check_true "--png16: metadata says so" sh -c "tr '\\0' ' ' <'$T/p16.png' | grep -aq 'tonemap clamp, 16-bit'"
+
+# several scenes in one call: each NAME.exr, a summary line each; a bad one is reported and
+# the others still render (exit 1)
+printf 'v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 1\nresolution 8 6\nl 1 1 5\nf 1 0 0 1 0 0 0 0\ns 0 0 0 1\n' >"$T/ball.nff"
+(cd "$T" && "$BIN" -W 16 -H 12 "$ROOT/scenes/default.json" ball.nff >"$T/out" 2>"$T/err"); check "two scenes" 0 $?
+check_true "two scenes: both images" test -s "$T/default.exr" -a -s "$T/ball.exr"
+check_true "two scenes: two summary lines" test "$(grep -c '^clwhitted: wrote' "$T/out")" -eq 2
+rm -f "$T/ball.exr"
+(cd "$T" && "$BIN" -W 16 -H 12 missing.nff ball.nff >"$T/out" 2>"$T/err"); check "a bad scene among several" 1 $?
+check_grep "a bad scene among several: named" "missing.nff" "$T/err"
+check_true "a bad scene among several: the next still renders" test -s "$T/ball.exr"
+
+# --camera FILE: the camera, size and depth of a camera file, for NFF scenes too; -W wins
+printf '{"image": {"width": 20, "height": 10}, "max_depth": 2,\n "camera": {"eye": [0, 3, 6], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 50}}\n' >"$T/cam.json"
+"$BIN" --camera "$T/cam.json" -o "$T/cam.png" scenes/default.json >"$T/out" 2>"$T/err"; check "--camera" 0 $?
+check_grep "--camera: its image size" "wrote $T/cam.png (20x10)" "$T/out"
+check_true "--camera: its depth in the metadata" sh -c "tr '\\0' ' ' <'$T/cam.png' | grep -aq '20x10, depth 2,'"
+"$BIN" --camera "$T/cam.json" -W 16 -o "$T/cam2.png" "$T/ball.nff" >"$T/out" 2>"$T/err"; check "--camera on an NFF scene" 0 $?
+check_grep "--camera: -W wins" "wrote $T/cam2.png (16x10)" "$T/out"
+"$BIN" -q -W 20 -H 10 -d 2 -o "$T/cam3.png" scenes/default.json >"$T/out" 2>"$T/err"
+"$IMGTOOL" diff "$T/cam.png" "$T/cam3.png" >"$T/out" 2>"$T/err"; check "--camera changes the view" 1 $?
+printf '{"camera": {"eye": [0, 0, 1]},\n "lights": []}\n' >"$T/badcam.json"
+"$BIN" --camera "$T/badcam.json" -o "$T/bc.png" scenes/default.json >"$T/out" 2>"$T/err"; check "bad camera file" 1 $?
+check_grep "bad camera file: file:line" "badcam.json:2: camera file: unknown key \"lights\"" "$T/err"
+"$BIN" --camera "$T/cam.nff" -o "$T/bc.png" scenes/default.json >"$T/out" 2>"$T/err"; check "camera file not JSON" 1 $?
+check_grep "camera file not JSON: message" "a camera file is JSON" "$T/err"
+
+# the log progress mode: plain lines, no carriage returns (one every 5 s: a short render
+# prints none, so only their form is checked here; tests/test_progress.c checks the lines)
+CLWHITTED_PROGRESS=log "$BIN" -W 16 -H 12 -o "$T/log.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "CLWHITTED_PROGRESS=log" 0 $?
+check_true "log mode: no carriage return" sh -c "! grep -q \"$(printf '\r')\" '$T/err'"
 
 # --list-devices: platform, device, type, compute units, memory, OpenCL C, fp64
 "$BIN" --list-devices >"$T/out" 2>"$T/err"; check "--list-devices details" 0 $?
@@ -140,16 +226,28 @@ check_grep "--list-devices: P:D, type, name" "^  device 0:0  \(CPU\|GPU\|acceler
 check_grep "--list-devices: units, memory, max alloc, OpenCL C, fp64" \
     "^ *[0-9][0-9]* compute units, [0-9.]* [MG]iB memory (max alloc [0-9.]* [MG]iB), OpenCL C [0-9]\.[0-9].*, fp64 \(yes\|no\)$" "$T/out"
 
-# the summary line: output, size, time, device, phases, Mrays/s
-"$BIN" -W 16 -H 12 -o "$T/sum.png" scenes/default.json >"$T/out" 2>"$T/err"; check "summary render" 0 $?
+# the summary line: output, size, time, (the kernel compile apart,) Mrays/s; short enough
+# for an 80-column terminal with a short output name. A fresh kernel cache: the compile
+# is reported apart.
+CLWHITTED_CACHE_DIR="$T/kcache" POCL_CACHE_DIR="$T/pcache" \
+    "$BIN" -W 16 -H 12 -o "$T/sum.png" scenes/default.json >"$T/out" 2>"$T/err"; check "summary render" 0 $?
 check_grep "summary line" \
-    "^clwhitted: wrote $T/sum.png (16x12, depth [0-9]*) in [0-9.]* s on .*: load [0-9.]* s, setup [0-9.]* s, render [0-9.]* s, [0-9.]* Mrays/s$" "$T/out"
+    "^clwhitted: wrote $T/sum.png (16x12) in [0-9.]* s, [0-9.]* Mrays/s\(; compile [0-9.]* s\)\{0,1\}$" "$T/out"
+check_grep "summary line: a fresh cache reports the compile apart" "; compile [0-9.]* s$" "$T/out"
 check_true "one summary line" test "$(wc -l <"$T/out")" -eq 1
+check_true "summary fits 80 columns" test "$(sed "s|$T/||" "$T/out" | wc -L)" -le 80
 "$BIN" --stats -W 16 -H 12 -o "$T/stats.png" scenes/default.json >"$T/out" 2>"$T/err"
 check "--stats render" 0 $?
-check_grep "--stats: phase times" "^time: parse [0-9.]* s, build [0-9.]* s, compile [0-9.]* s, upload [0-9.]* s, trace [0-9.]* s ([0-9]* passes)$" "$T/out"
+check_grep "--stats: device" "^device: .*, [0-9]* compute units\{0,1\}, \(pixel\|wavefront\) kernel; image 16x12, depth [0-9]*$" "$T/out"
+check_grep "--stats: phase times" "^time: parse [0-9.]* s, build [0-9.]* s, compile [0-9.]* s, upload [0-9.]* s, trace [0-9.]* s ([0-9]* passes), first launch [0-9.]* s$" "$T/out"
 check_grep "--stats: fixed costs" "^fixed: opencl [0-9.]* s (beside the parse), write [0-9.]* s$" "$T/out"
 check_true "no progress bar when stderr is a file" test ! -s "$T/err"
+# CLWHITTED_SUMMARY=long: the phases and the device, for scripts (tools/gallery, tools/bench)
+CLWHITTED_SUMMARY=long "$BIN" -W 16 -H 12 -o "$T/long.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "CLWHITTED_SUMMARY=long" 0 $?
+check_grep "the long summary line" \
+    "^clwhitted: wrote $T/long.png (16x12, depth [0-9]*) in [0-9.]* s on .*: load [0-9.]* s, setup [0-9.]* s, render [0-9.]* s, [0-9.]* Mrays/s$" "$T/out"
+CLWHITTED_SUMMARY=bogus usage_error "CLWHITTED_SUMMARY=bogus" "CLWHITTED_SUMMARY expects 'short' or 'long', got 'bogus'" -o "$T/e.png" scenes/default.json
 
 # the progress bar: forced on a file, it draws in place and clears the line at the end
 CLWHITTED_PROGRESS=always "$BIN" -W 32 -H 24 --spp 2 -o "$T/p.png" scenes/default.json >"$T/out" 2>"$T/err"
@@ -190,10 +288,6 @@ check_true "half EXR is smaller" test "$(wc -c <"$T/h.exr")" -lt "$(wc -c <"$T/f
 check_true "EXR software attribute" sh -c "tr '\\0' ' ' <'$T/h.exr' | grep -aq 'software string .*clwhitted [0-9]'"
 check_true "EXR comments: the settings" sh -c "tr '\\0' ' ' <'$T/h.exr' | grep -aq '16x12, depth [0-9]*, spp 1, precision robust, half floats'"
 check_true "EXR renderTime attribute" grep -aq renderTime "$T/h.exr"
-"$BIN" -W 16 -H 12 --exposure 1 -o "$T/w.exr" scenes/default.json >"$T/out" 2>"$T/err"
-check_grep "exposure on EXR warns" "warning: --exposure and --tonemap apply to PNG output only" "$T/err"
-"$BIN" -W 16 -H 12 --half -o "$T/w.png" scenes/default.json >"$T/out" 2>"$T/err"
-check_grep "half on PNG warns" "warning: --half applies to EXR output only" "$T/err"
 # bad input of every kind: exit 1, the file (and line) named, no image written
 mkdir "$T/dir.nff"
 "$BIN" -o "$T/dir.png" "$T/dir.nff" >"$T/out" 2>"$T/err"; check "directory as scene" 1 $?

@@ -617,6 +617,59 @@ static void test_png_roundtrip(void **state)
     image_free(&c);
 }
 
+/* --png16: the file says 16 bits, every value comes back within half of 1/65535 in the
+ * encoded domain (8 bits could not: 1/510), exposure and tone map applied, and rows over
+ * several compressed pieces. */
+static void test_png16_roundtrip(void **state)
+{
+    const int w = 301, h = 250; /* 301 * 6 + 1 bytes a row: 36 rows a piece, 7 pieces */
+    char path[PATHLEN], err[512] = "";
+    unsigned char head[32];
+    image a, b, c;
+    image_write_opts o;
+    FILE *f;
+    int k;
+    (void)state;
+
+    make_image(&a, w, h);
+    for (size_t i = 0; i < (size_t)w * h * 3; i++)
+        a.rgb[i] = (float)((i * 2654435761u) % 1000003u) / 1000002.0f; /* spread over [0,1] */
+    a.rgb[0] = 0.0f;
+    a.rgb[1] = 1.0f;
+    for (k = 0; k < 2; k++) {
+        image_write_opts_default(&o);
+        o.png16 = 1;
+        o.exposure = k ? 0.5 : 0.0;
+        o.tonemap = k ? IMAGE_TONEMAP_REINHARD : IMAGE_TONEMAP_CLAMP;
+        tpath(path, "round16.png");
+        assert_int_equal(image_write_ex(&a, path, &o, err, sizeof err), 0);
+        f = fopen(path, "rb");
+        assert_non_null(f);
+        assert_int_equal(fread(head, 1, sizeof head, f), sizeof head);
+        fclose(f);
+        assert_int_equal(head[24], 16); /* IHDR bit depth */
+        assert_int_equal(head[25], 2);  /* RGB */
+        assert_int_equal(image_read_png(path, 1, &b, err, sizeof err), 0);
+        assert_int_equal(image_read_png(path, 0, &c, err, sizeof err), 0);
+        assert_int_equal(b.width, w);
+        assert_int_equal(b.height, h);
+        for (size_t i = 0; i < (size_t)w * h * 3; i++) {
+            double d = a.rgb[i] * pow(2.0, o.exposure);
+            double want_enc = ref_encode(k ? d / (1.0 + d) : d > 1 ? 1 : d);
+            assert_float_equal(c.rgb[i], want_enc, 0.5 / 65535.0 + 1e-7);
+            if (!k) /* linear values within half a code times the steepest slope (~2.3) */
+                assert_float_equal(b.rgb[i], a.rgb[i], 1.8e-5);
+        }
+        if (!k) {
+            assert_true(b.rgb[0] == 0.0f);
+            assert_true(b.rgb[1] == 1.0f);
+        }
+        image_free(&b);
+        image_free(&c);
+    }
+    image_free(&a);
+}
+
 static void test_png_16bit_read(void **state)
 {
     enum { W = 7, H = 5 };
@@ -1257,6 +1310,7 @@ int main(void)
         cmocka_unit_test(test_png_known_encodings),
         cmocka_unit_test(test_png_roundtrip),
         cmocka_unit_test(test_png_16bit_read),
+        cmocka_unit_test(test_png16_roundtrip),
         cmocka_unit_test(test_png_other_formats),
         cmocka_unit_test(test_write_is_atomic),
         cmocka_unit_test(test_compare),

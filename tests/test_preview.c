@@ -307,6 +307,31 @@ static void test_window_matches_batch(void **state)
         image_write(&batch, OUT "/a-batch.png", err, sizeof err) != 0 ||
         image_read_exr(OUT "/a-save.exr", &saved, err, sizeof err) != 0)
         fail_msg("%s", err);
+    /* F5's images carry the batch images' metadata: title, software, device, settings */
+    {
+        static const char *const want[] = {"Title",
+                                           "default.json",
+                                           "Software",
+                                           "clwhitted ",
+                                           "Source",
+                                           "160x120, depth 6, spp 16 (16 done), "
+                                           "precision robust, exposure +0 EV, "
+                                           "tonemap clamp, preview"};
+        FILE *pf = fopen(OUT "/a-save.png", "rb");
+        char buf[65536];
+        size_t n, i;
+        assert_non_null(pf);
+        n = fread(buf, 1, sizeof buf, pf);
+        fclose(pf);
+        for (i = 0; i < sizeof want / sizeof *want; i++) {
+            size_t k, len = strlen(want[i]);
+            int found = 0;
+            for (k = 0; k + len <= n && !found; k++)
+                found = memcmp(buf + k, want[i], len) == 0;
+            if (!found)
+                fail_msg("a-save.png has no '%s' in its metadata", want[i]);
+        }
+    }
     /* the saved linear image is the renderer's, so it matches the batch EXR closely */
     assert_int_equal(image_compare(&saved, &batch, NULL, 1e-4, &st), 0);
     printf("  a-save.exr vs a-batch.exr: max |diff| %.3g, %ld pixels over 1e-4\n", st.max_abs,
@@ -338,12 +363,82 @@ static void test_window_matches_batch(void **state)
     assert_changed(OUT "/d.png", OUT "/e.png");
 }
 
+/* The C key: after a move, the printed batch command line (with the camera file written
+ * beside a copy of the scene) renders the window's picture. The H key: the overlay covers
+ * the picture (keys, samples, rate, camera) and the help is printed; H again removes it. */
+static const char camera_script[] = "wait\n"
+                                    "drag left 30 -12\n"
+                                    "scroll 1\n"
+                                    "wait\n"
+                                    "grab " OUT "/f.png\n"
+                                    "key h\n"
+                                    "grab " OUT "/f-overlay.png\n"
+                                    "key h\n"
+                                    "grab " OUT "/f-after.png\n"
+                                    "key c\n"
+                                    "wait\n"
+                                    "quit\n";
+
+static void test_camera_key(void **state)
+{
+    char *text, *line, *end, cmd[4096];
+    FILE *f;
+    int rc;
+    (void)state;
+    out_dir();
+    if (run("command -v xvfb-run >/dev/null") != 0)
+        fail_msg("xvfb-run is missing: run tools/install-deps (Debian package xvfb)");
+    f = fopen(OUT "/camera-script", "w");
+    if (!f || fputs(camera_script, f) == EOF || fclose(f) != 0)
+        fail_msg("cannot write " OUT "/camera-script");
+    remove(OUT "/view-camera.json");
+    assert_int_equal(run("cp scenes/default.json " OUT "/view.json"), 0);
+    rc = run("xvfb-run -a -s '-screen 0 640x480x24' env LIBGL_ALWAYS_SOFTWARE=1 " BIN
+             " -W 160 -H 120 --preview-script " OUT "/camera-script " OUT "/view.json >" OUT
+             "/camera.out 2>" OUT "/camera.err");
+    print_file(OUT "/camera.out");
+    if (rc != 0) {
+        print_file(OUT "/camera.err");
+        fail_msg("the scripted preview exited with %d", rc);
+    }
+    text = slurp(OUT "/camera.out");
+    if (!strstr(text, "clwhitted: camera written to " OUT "/view-camera.json"))
+        fail_msg("the C key did not say where it wrote the camera");
+    if (!strstr(text, "\"camera\": {"))
+        fail_msg("the C key did not print the JSON camera block");
+    line = strstr(text, "\n  clwhitted ");
+    if (!line)
+        fail_msg("the C key printed no batch command line");
+    line += strlen("\n  clwhitted ");
+    end = strchr(line, '\n');
+    assert_non_null(end);
+    *end = '\0';
+    if (!strstr(line, "--camera " OUT "/view-camera.json " OUT "/view.json"))
+        fail_msg("the command line does not name the camera file and the scene: %s", line);
+    snprintf(cmd, sizeof cmd, BIN " -q -o " OUT "/f-batch.png %s", line);
+    printf("  %s\n", cmd);
+    free(text);
+    if (run(cmd) != 0)
+        fail_msg("the printed command failed: %s", cmd);
+    assert_matches(OUT "/f.png", OUT "/f-batch.png");
+    assert_int_equal(run(BIN " -q -W 160 -H 120 --spp 16 -o " OUT "/f-plain.png " OUT "/view.json"),
+                     0);
+    assert_changed(OUT "/f-plain.png", OUT "/f.png");
+    assert_changed(OUT "/f.png", OUT "/f-overlay.png");
+    assert_matches(OUT "/f.png", OUT "/f-after.png");
+    text = slurp(OUT "/camera.out");
+    if (!strstr(text, "preview keys:"))
+        fail_msg("H printed no help");
+    free(text);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_no_display),
         cmocka_unit_test(test_no_gui_libraries_linked),
         cmocka_unit_test(test_window_matches_batch),
+        cmocka_unit_test(test_camera_key),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -11,20 +11,76 @@
 static void test_wanted(void **state)
 {
     (void)state;
+    /* CLWHITTED_PROGRESS's values; anything else is refused (a usage error in cli.c) */
+    assert_int_equal(progress_mode_parse(NULL), PROGRESS_AUTO);
+    assert_int_equal(progress_mode_parse(""), PROGRESS_AUTO);
+    assert_int_equal(progress_mode_parse("auto"), PROGRESS_AUTO);
+    assert_int_equal(progress_mode_parse("always"), PROGRESS_ALWAYS);
+    assert_int_equal(progress_mode_parse("1"), PROGRESS_ALWAYS);
+    assert_int_equal(progress_mode_parse("never"), PROGRESS_NEVER);
+    assert_int_equal(progress_mode_parse("0"), PROGRESS_NEVER);
+    assert_int_equal(progress_mode_parse("log"), PROGRESS_LOG);
+    assert_int_equal(progress_mode_parse("bogus"), -1);
+    assert_int_equal(progress_mode_parse("Always"), -1);
+    assert_int_equal(progress_mode_parse("2"), -1);
     /* auto: only on a terminal */
-    assert_int_equal(progress_wanted(0, NULL, 1), 1);
-    assert_int_equal(progress_wanted(0, NULL, 0), 0);
-    assert_int_equal(progress_wanted(0, "auto", 1), 1);
-    assert_int_equal(progress_wanted(0, "auto", 0), 0);
-    assert_int_equal(progress_wanted(0, "bogus", 0), 0);
+    assert_int_equal(progress_wanted(0, PROGRESS_AUTO, 1), 1);
+    assert_int_equal(progress_wanted(0, PROGRESS_AUTO, 0), 0);
     /* forced either way */
-    assert_int_equal(progress_wanted(0, "always", 0), 1);
-    assert_int_equal(progress_wanted(0, "1", 0), 1);
-    assert_int_equal(progress_wanted(0, "never", 1), 0);
-    assert_int_equal(progress_wanted(0, "0", 1), 0);
+    assert_int_equal(progress_wanted(0, PROGRESS_ALWAYS, 0), 1);
+    assert_int_equal(progress_wanted(0, PROGRESS_NEVER, 1), 0);
+    /* log lines, terminal or not */
+    assert_int_equal(progress_wanted(0, PROGRESS_LOG, 0), PROGRESS_LOG);
+    assert_int_equal(progress_wanted(0, PROGRESS_LOG, 1), PROGRESS_LOG);
     /* --quiet wins */
-    assert_int_equal(progress_wanted(1, NULL, 1), 0);
-    assert_int_equal(progress_wanted(1, "always", 1), 0);
+    assert_int_equal(progress_wanted(1, PROGRESS_AUTO, 1), 0);
+    assert_int_equal(progress_wanted(1, PROGRESS_ALWAYS, 1), 0);
+    assert_int_equal(progress_wanted(1, PROGRESS_LOG, 1), 0);
+}
+
+/* The log mode: no status lines, no bar, no carriage return; a whole line per report
+ * ("clwhitted: 45%  ... Mrays/s"), the first one interval after the start (not at 0 %),
+ * then at most one per interval; nothing to clear. */
+static void test_log_mode(void **state)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    progress_bar p;
+    (void)state;
+    assert_non_null(f);
+    progress_init(&p, f, PROGRESS_LOG);
+    assert_true(p.log);
+    assert_true(p.interval >= 1.0); /* CW_PROGRESS_LOG_S: seconds, not a redraw rate */
+    progress_status(&p, "building the kernels ...");
+    progress_begin(&p);
+    p.interval = 0.0;            /* every report prints (the test does not wait) */
+    progress_update(&p, 0.0, 0); /* the start: no line */
+    fflush(f);
+    assert_int_equal(len, 0);
+    progress_update(&p, 0.25, 1000000);
+    progress_update(&p, 0.5, 2000000);
+    progress_clear(&p);
+    fflush(f);
+    assert_null(strchr(buf, '\r'));
+    assert_null(strchr(buf, '['));
+    assert_non_null(strstr(buf, "clwhitted:  25%  1.00 Mrays  "));
+    assert_non_null(strstr(buf, "\nclwhitted:  50%  2.00 Mrays  "));
+    assert_non_null(strstr(buf, " Mrays/s\n"));
+    assert_int_equal(buf[len - 1], '\n');
+    {
+        size_t lines = 0, i;
+        for (i = 0; i < len; i++)
+            lines += buf[i] == '\n';
+        assert_int_equal(lines, 2);
+    }
+    /* a long interval: the next report is skipped */
+    p.interval = 1e9;
+    progress_update(&p, 0.75, 3000000);
+    fflush(f);
+    assert_null(strstr(buf, " 75%"));
+    fclose(f);
+    free(buf);
 }
 
 static void test_rate(void **state)
@@ -174,7 +230,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_wanted),         cmocka_unit_test(test_rate),
         cmocka_unit_test(test_time),           cmocka_unit_test(test_format),
-        cmocka_unit_test(test_draw_and_clear),
+        cmocka_unit_test(test_draw_and_clear), cmocka_unit_test(test_log_mode),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
