@@ -1,9 +1,11 @@
-/* clwhitted-mpi's work distribution. Rank 0 holds the tile counter: a rank asks for a tile
- * by sending its last tile's rows (or an empty message at the start), rank 0 answers with
- * the next tile's number or -1 (stop). Rank 0 renders tiles too and answers between its
- * own kernel launches (from the renderer's progress callback), so no rank waits longer
- * than one launch. Waiting ranks poll with short sleeps rather than spinning in MPI, so
- * that ranks sharing cores leave them to the ones rendering.
+/* clwhitted-mpi's work distribution. Rank 0 holds the tile counter: a rank asks for tiles
+ * (TAG_REQ), rank 0 answers each request with the next tile's number or -1 (no more), and
+ * the rank sends each tile's rows back (TAG_RESULT) in the order it got them. A rank keeps
+ * MWORK_AHEAD requests open, so that its next tile is known before it finishes one: rank 0
+ * renders tiles too and answers only between its own kernel launches (from the renderer's
+ * progress callback). After its last answer a rank says it is done (TAG_DONE). Waiting
+ * ranks poll with short sleeps rather than spinning in MPI, so that ranks sharing cores
+ * leave them to the ones rendering.
  * Ranks send a heartbeat with their ray count at least every MWORK_BEAT_S while rendering
  * (also from the progress callback); rank 0 ends the job (MPI_Abort) when a rank with a
  * tile is silent for timeout_s. A rank that dies is normally caught sooner by the MPI
@@ -19,10 +21,13 @@
 #include "sys.h"
 
 #define MWORK_BEAT_S 0.25
-#define TAG_RESULT 1 /* worker -> 0: the assigned tile's floats (none: ready) */
-#define TAG_BEAT 2   /* worker -> 0: rays traced so far (unsigned long long) */
-#define TAG_FAIL 3   /* worker -> 0: its error message */
-#define TAG_TILE 4   /* 0 -> worker: the next tile (int), -1: stop */
+#define MWORK_AHEAD 2 /* requests a rank keeps open */
+#define TAG_REQ 1     /* worker -> 0: a tile, please (no data) */
+#define TAG_RESULT 2  /* worker -> 0: the floats of its oldest tile */
+#define TAG_BEAT 3    /* worker -> 0: rays traced so far (unsigned long long) */
+#define TAG_FAIL 4    /* worker -> 0: its error message (it sends nothing more) */
+#define TAG_DONE 5    /* worker -> 0: every answer received, nothing more to send */
+#define TAG_TILE 6    /* 0 -> worker: the next tile (int), -1: no more */
 
 /* Rank 0's view of the job. */
 typedef struct {
@@ -30,8 +35,9 @@ typedef struct {
     float *acc;
     mwork_rank *mine;
     int ntiles, next, done;
-    int *assigned;                /* per rank: its tile, -1 none */
-    int *active;                  /* per rank: not yet told to stop (nor failed) */
+    int *assigned;                /* per rank: MWORK_AHEAD slots, its tiles in order */
+    int *nassigned;               /* per rank: how many of them */
+    int *active;                  /* per rank: not yet done (nor failed) */
     double *last_seen;            /* per rank: sys_now() of its last message */
     unsigned long long *rays;     /* per rank: the rays of its last heartbeat */
     unsigned long long own_rays;  /* rank 0's */
@@ -94,13 +100,37 @@ static void master_progress(master *m)
 static int master_answer(master *m, int w)
 {
     int tile = -1, e;
-    if (!m->failed && m->next < m->ntiles)
+    if (!m->failed && m->next < m->ntiles && m->nassigned[w] < MWORK_AHEAD) {
         tile = m->next++;
-    m->assigned[w] = tile;
-    if (tile < 0)
-        m->active[w] = 0;
+        m->assigned[w * MWORK_AHEAD + m->nassigned[w]++] = tile;
+    }
     e = MPI_Send(&tile, 1, MPI_INT, w, TAG_TILE, MPI_COMM_WORLD);
     return e == MPI_SUCCESS ? 0 : mpi_failed(e, "MPI_Send(tile)", m->err, m->errlen);
+}
+
+/* Receives rank w's oldest tile (probed: st). */
+static int master_result(master *m, MPI_Status *st)
+{
+    int w = st->MPI_SOURCE, count = 0, row0 = 0, nrows = 0, tile = -1, k, e;
+    if (m->nassigned[w] > 0) {
+        tile = m->assigned[w * MWORK_AHEAD];
+        nrows = tile_span(m->j, tile, &row0);
+    }
+    MPI_Get_count(st, MPI_FLOAT, &count);
+    if (tile < 0 || (size_t)count != tile_floats(m->j, nrows)) {
+        snprintf(m->err, m->errlen, "rank %d sent %d floats for tile %d (%d rows)", w, count, tile,
+                 nrows);
+        return -1;
+    }
+    e = MPI_Recv(m->acc + tile_floats(m->j, row0), count, MPI_FLOAT, w, TAG_RESULT,
+                 MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    if (e != MPI_SUCCESS)
+        return mpi_failed(e, "MPI_Recv(tile)", m->err, m->errlen);
+    for (k = 1; k < m->nassigned[w]; k++)
+        m->assigned[w * MWORK_AHEAD + k - 1] = m->assigned[w * MWORK_AHEAD + k];
+    m->nassigned[w]--;
+    m->done++;
+    return 0;
 }
 
 /* Receives one message from rank w (probed: st). */
@@ -112,32 +142,23 @@ static int master_receive(master *m, MPI_Status *st)
         e = MPI_Recv(&m->rays[w], 1, MPI_UNSIGNED_LONG_LONG, w, TAG_BEAT, MPI_COMM_WORLD,
                      MPI_STATUS_IGNORE);
     } else if (st->MPI_TAG == TAG_FAIL) {
-        char msg[1024];
+        char *msg;
         MPI_Get_count(st, MPI_CHAR, &count);
-        if (count > (int)sizeof msg - 1)
-            count = (int)sizeof msg - 1;
-        memset(msg, 0, sizeof msg);
-        e = MPI_Recv(msg, (int)sizeof msg - 1, MPI_CHAR, w, TAG_FAIL, MPI_COMM_WORLD,
+        msg = calloc((size_t)(count > 0 ? count : 0) + 1, 1);
+        e = MPI_Recv(msg, msg ? count : 0, MPI_CHAR, w, TAG_FAIL, MPI_COMM_WORLD,
                      MPI_STATUS_IGNORE);
         m->active[w] = 0;
         if (!m->failed)
-            snprintf(m->err, m->errlen, "rank %d: %s", w, msg);
+            snprintf(m->err, m->errlen, "rank %d: %s", w, msg ? msg : "failed (out of memory)");
         m->failed = 1;
+        free(msg);
     } else if (st->MPI_TAG == TAG_RESULT) {
-        int tile = m->assigned[w], row0 = 0, nrows = 0;
-        if (tile >= 0)
-            nrows = tile_span(m->j, tile, &row0);
-        MPI_Get_count(st, MPI_FLOAT, &count);
-        if ((size_t)count != (tile >= 0 ? tile_floats(m->j, nrows) : 0)) {
-            snprintf(m->err, m->errlen, "rank %d sent %d floats for tile %d (%d rows)", w, count,
-                     tile, nrows);
-            return -1;
-        }
-        e = MPI_Recv(m->acc + tile_floats(m->j, row0), count, MPI_FLOAT, w, TAG_RESULT,
-                     MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-        if (e == MPI_SUCCESS && tile >= 0)
-            m->done++;
-        if (e == MPI_SUCCESS)
+        return master_result(m, st);
+    } else if (st->MPI_TAG == TAG_REQ || st->MPI_TAG == TAG_DONE) {
+        e = MPI_Recv(NULL, 0, MPI_INT, w, st->MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        if (e == MPI_SUCCESS && st->MPI_TAG == TAG_DONE)
+            m->active[w] = 0;
+        if (e == MPI_SUCCESS && st->MPI_TAG == TAG_REQ)
             return master_answer(m, w);
     } else {
         snprintf(m->err, m->errlen, "rank %d sent an unknown message (tag %d)", w, st->MPI_TAG);
@@ -156,7 +177,7 @@ static void master_watchdog(master *m)
     if (m->j->timeout_s <= 0)
         return;
     for (w = 1; w < m->j->size; w++)
-        if (m->active[w] && now - m->last_seen[w] > m->j->timeout_s) {
+        if (m->active[w] && m->nassigned[w] > 0 && now - m->last_seen[w] > m->j->timeout_s) {
             progress_clear(m->j->bar);
             snprintf(m->err, m->errlen,
                      "rank %d sent nothing for %.0f s (killed or hung?); ending the job with no "
@@ -220,16 +241,16 @@ int mwork_master(const mwork_job *j, float *acc, mwork_rank *mine, char *err, si
     m.err = err;
     m.errlen = errlen;
     m.ntiles = (j->height + j->tile_rows - 1) / j->tile_rows;
-    m.assigned = malloc((size_t)j->size * sizeof *m.assigned);
+    m.assigned = malloc((size_t)j->size * MWORK_AHEAD * sizeof *m.assigned);
+    m.nassigned = calloc((size_t)j->size, sizeof *m.nassigned);
     m.active = malloc((size_t)j->size * sizeof *m.active);
     m.last_seen = malloc((size_t)j->size * sizeof *m.last_seen);
     m.rays = calloc((size_t)j->size, sizeof *m.rays);
-    if (!m.assigned || !m.active || !m.last_seen || !m.rays) {
+    if (!m.assigned || !m.nassigned || !m.active || !m.last_seen || !m.rays) {
         snprintf(err, errlen, "out of memory");
         m.failed = 1;
     }
     for (w = 0; !m.failed && w < j->size; w++) {
-        m.assigned[w] = -1;
         m.active[w] = w > 0;
         m.last_seen[w] = now;
     }
@@ -264,6 +285,7 @@ int mwork_master(const mwork_job *j, float *acc, mwork_rank *mine, char *err, si
     rc = m.failed ? -1 : 0;
 out_free:
     free(m.assigned);
+    free(m.nassigned);
     free(m.active);
     free(m.last_seen);
     free(m.rays);
@@ -308,7 +330,7 @@ int mwork_worker(const mwork_job *j, mwork_rank *mine, char *err, size_t errlen)
 {
     worker wk = {0, 0};
     float *buf = malloc(tile_floats(j, j->tile_rows) * sizeof *buf);
-    int tile = -1, count = 0, rc = -1, e;
+    int tile = -1, open = 0, more = 1, rc = -1, e;
 
     if (!buf) {
         snprintf(err, errlen, "out of memory for a %d-row tile", j->tile_rows);
@@ -318,15 +340,21 @@ int mwork_worker(const mwork_job *j, mwork_rank *mine, char *err, size_t errlen)
     for (;;) {
         int row0 = 0, nrows;
         double t0;
-        e = MPI_Send(buf, count, MPI_FLOAT, 0, TAG_RESULT, MPI_COMM_WORLD);
+        for (e = MPI_SUCCESS; more && open < MWORK_AHEAD && e == MPI_SUCCESS; open++)
+            e = MPI_Send(NULL, 0, MPI_INT, 0, TAG_REQ, MPI_COMM_WORLD);
         if (e != MPI_SUCCESS) {
-            mpi_failed(e, "MPI_Send(tile)", err, errlen);
+            mpi_failed(e, "MPI_Send(request)", err, errlen);
             goto out_free; /* rank 0 cannot be told */
         }
+        if (open == 0)
+            break;
         if (worker_next_tile(&tile, err, errlen) != 0)
             goto out_free;
-        if (tile < 0)
-            break;
+        open--;
+        if (tile < 0) {
+            more = 0; /* every later answer is -1 too */
+            continue;
+        }
         nrows = tile_span(j, tile, &row0);
         t0 = sys_now();
         wk.last_beat = t0;
@@ -334,9 +362,15 @@ int mwork_worker(const mwork_job *j, mwork_rank *mine, char *err, size_t errlen)
             goto out_fail;
         mine->render_s += sys_now() - t0;
         mine->tiles++;
-        count = (int)tile_floats(j, nrows);
+        e = MPI_Send(buf, (int)tile_floats(j, nrows), MPI_FLOAT, 0, TAG_RESULT, MPI_COMM_WORLD);
+        if (e != MPI_SUCCESS) {
+            mpi_failed(e, "MPI_Send(tile)", err, errlen);
+            goto out_free;
+        }
     }
     rc = 0;
+    if (MPI_Send(NULL, 0, MPI_INT, 0, TAG_DONE, MPI_COMM_WORLD) != MPI_SUCCESS)
+        rc = -1;
     goto out_free;
 out_fail:
     mine->failed = 1;

@@ -6,7 +6,7 @@
 # clwhitted's and lists every rank; failures (a bad scene, a missing device or another
 # image size on one rank; a rank killed by SIGKILL mid-render; a stopped rank and the
 # watchdog) end the job with a non-zero exit, the rank's message and no image, within time
-# limits. Skipped, saying so, when mpirun or BUILD/clwhitted-mpi is missing.
+# limits; tools/bench-mpi --quick runs. Skipped, saying so, when mpirun or BUILD/clwhitted-mpi is missing.
 # Usage: tests/mpi.sh BUILD (from the repository root).
 set -u
 BUILD=${1:-build}
@@ -159,6 +159,12 @@ mid_render() { # mid_render NAME SIGNAL LIMIT MESSAGE
 }
 mid_render "rank 1 killed" KILL 20 ""
 mid_render "rank 1 stopped" STOP 30 "clwhitted-mpi: rank 1 sent nothing for 3 s"
+
+# The benchmark runs end to end (its figures are not checked: speed lives in benchmarks).
+timeout 300 tools/bench-mpi --quick --build "$BUILD" --out "$T/bench" >"$T/log" 2>&1
+check "tools/bench-mpi --quick" 0 $?
+check_true "bench-mpi prints the table and the overhead" sh -c \
+    "grep -q '^| clwhitted-mpi | 2 | 1 |' '$T/log' && grep -q '^Overhead of the MPI path at 1 rank' '$T/log'"
 
 echo "mpi.sh: $pass passed, $fails failed"
 [ "$fails" -eq 0 ]
