@@ -199,16 +199,16 @@ static void report(const job *j, const mwork_rank *all, double render_s, double 
     if (!j->o.quiet)
         printf("clwhitted-mpi: wrote %s (%dx%d, depth %d) in %.3f s on %d ranks: render %.3f s, "
                "%s Mrays/s\n",
-               sys_escape(shown, sizeof shown, j->output), j->s.width, j->s.height,
-               j->s.max_depth, total_s, j->size, render_s, rate);
+               sys_escape(shown, sizeof shown, j->output), j->s.width, j->s.height, j->s.max_depth,
+               total_s, j->size, render_s, rate);
     if (!j->o.settings.stats)
         return;
     printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu (hit %llu)\n",
            sum.eye_rays, sum.eye_hits, sum.shadow_rays, sum.shadow_blocked, sum.secondary_rays,
            sum.secondary_hits);
     for (r = 0; r < j->size; r++)
-        printf("rank %d: %d tiles, set-up %.3f s, render %.3f s, %llu rays, %s\n", r,
-               all[r].tiles, all[r].setup_s, all[r].render_s,
+        printf("rank %d: %d tiles, set-up %.3f s, render %.3f s, %llu rays, %s\n", r, all[r].tiles,
+               all[r].setup_s, all[r].render_s,
                all[r].st.eye_rays + all[r].st.shadow_rays + all[r].st.secondary_rays,
                sys_escape(shown, sizeof shown, all[r].device));
 }
@@ -223,8 +223,8 @@ static int finish(job *j, const float *acc, const mwork_rank *all, double render
         say(err);
         return 1;
     }
-    set_metadata(j, render_s, &j->o.write, title, sizeof title, software, sizeof software,
-                 settings, sizeof settings);
+    set_metadata(j, render_s, &j->o.write, title, sizeof title, software, sizeof software, settings,
+                 sizeof settings);
     if (image_write_ex(&img, j->output, &j->o.write, err, sizeof err) != 0) {
         say(err);
     } else {

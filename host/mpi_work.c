@@ -35,14 +35,14 @@ typedef struct {
     float *acc;
     mwork_rank *mine;
     int ntiles, next, done;
-    int *assigned;                /* per rank: MWORK_AHEAD slots, its tiles in order */
-    int *nassigned;               /* per rank: how many of them */
-    int *active;                  /* per rank: not yet done (nor failed) */
-    double *last_seen;            /* per rank: sys_now() of its last message */
-    unsigned long long *rays;     /* per rank: the rays of its last heartbeat */
-    unsigned long long own_rays;  /* rank 0's */
-    double own_fraction;          /* of rank 0's current tile */
-    int failed;                   /* a rank failed: hand out no more tiles */
+    int *assigned;               /* per rank: MWORK_AHEAD slots, its tiles in order */
+    int *nassigned;              /* per rank: how many of them */
+    int *active;                 /* per rank: not yet done (nor failed) */
+    double *last_seen;           /* per rank: sys_now() of its last message */
+    unsigned long long *rays;    /* per rank: the rays of its last heartbeat */
+    unsigned long long own_rays; /* rank 0's */
+    double own_fraction;         /* of rank 0's current tile */
+    int failed;                  /* a rank failed: hand out no more tiles */
     char *err;
     size_t errlen;
 } master;
@@ -122,8 +122,8 @@ static int master_result(master *m, MPI_Status *st)
                  nrows);
         return -1;
     }
-    e = MPI_Recv(m->acc + tile_floats(m->j, row0), count, MPI_FLOAT, w, TAG_RESULT,
-                 MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    e = MPI_Recv(m->acc + tile_floats(m->j, row0), count, MPI_FLOAT, w, TAG_RESULT, MPI_COMM_WORLD,
+                 MPI_STATUS_IGNORE);
     if (e != MPI_SUCCESS)
         return mpi_failed(e, "MPI_Recv(tile)", m->err, m->errlen);
     for (k = 1; k < m->nassigned[w]; k++)
@@ -307,8 +307,7 @@ static int worker_callback(void *ctx, double fraction, unsigned long long rays)
     (void)fraction;
     if (now - wk->last_beat >= MWORK_BEAT_S) {
         wk->last_beat = now;
-        if (MPI_Send(&rays, 1, MPI_UNSIGNED_LONG_LONG, 0, TAG_BEAT, MPI_COMM_WORLD) !=
-            MPI_SUCCESS)
+        if (MPI_Send(&rays, 1, MPI_UNSIGNED_LONG_LONG, 0, TAG_BEAT, MPI_COMM_WORLD) != MPI_SUCCESS)
             wk->mpi_error = 1;
     }
     return wk->mpi_error;

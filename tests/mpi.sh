@@ -32,7 +32,8 @@ check() { # check NAME EXPECTED_RC ACTUAL_RC
 }
 check_true() { # check_true NAME COMMAND...
     n=$1; shift
-    if "$@"; then pass=$((pass + 1)); else echo "FAIL: $n"; sed 's/^/    /' "$T/log"; fails=$((fails + 1)); fi
+    if "$@"; then pass=$((pass + 1)); else
+        echo "FAIL: $n"; tr '\r' '\n' <"$T/log" | tail -n 20 | sed 's/^/    /'; fails=$((fails + 1)); fi
 }
 has() { grep -qF -- "$1" "$T/log"; }
 # same_pixels A B: the decoded pixels (linear floats from EXR, sRGB-decoded PNG) bit for bit
@@ -131,16 +132,20 @@ mid_render() { # mid_render NAME SIGNAL LIMIT MESSAGE
     name=$1 sig=$2 limit=$3 msg=$4
     mkdir -p "$T/out"
     rm -f "$T/out/"*
+    : >"$T/log" # emptied here: the job's own redirection may come after the wait below
     CLWHITTED_PROGRESS=always CLWHITTED_MPI_TIMEOUT=3 $RUN -np 2 "$MPI" -W 640 -H 960 \
         --spp 64 -o "$T/out/k.exr" scenes/default.json >"$T/log" 2>&1 &
     job=$!
     i=0
-    while [ $i -lt 600 ] && ! has "Mrays"; do sleep 0.1; i=$((i + 1)); done
     victim=""
-    for p in $(pgrep -P $job); do
-        if tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx OMPI_COMM_WORLD_RANK=1; then
-            victim=$p
-        fi
+    while [ $i -lt 600 ] && [ -z "$victim" ]; do
+        sleep 0.1
+        i=$((i + 1))
+        has "Mrays" || continue
+        for p in $(pgrep -P $job); do
+            if tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx OMPI_COMM_WORLD_RANK=1
+            then victim=$p; fi
+        done
     done
     check_true "$name: rank 1 found rendering" test -n "$victim"
     [ -n "$victim" ] && kill "-$sig" "$victim"
@@ -151,7 +156,7 @@ mid_render() { # mid_render NAME SIGNAL LIMIT MESSAGE
     wait "$job"
     rc=$?
     t1=$(date +%s)
-    kill "$guard" 2>/dev/null
+    pkill -P "$guard" 2>/dev/null; kill "$guard" 2>/dev/null
     check_true "$name: a non-zero exit" test $rc -ne 0
     check_true "$name: ended within $limit s ($((t1 - t0)) s)" test $((t1 - t0)) -lt "$limit"
     check_true "$name: no image, no temporary file" test -z "$(ls -A "$T/out")"
