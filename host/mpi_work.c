@@ -167,25 +167,32 @@ static int master_receive(master *m, MPI_Status *st)
     return e == MPI_SUCCESS ? 0 : mpi_failed(e, "MPI_Recv", m->err, m->errlen);
 }
 
+/* Ends the job from rank 0 with err: the other ranks cannot be stopped cleanly (MPI failed,
+ * a rank broke the protocol, or a rank is silent). */
+static void master_abort(master *m)
+{
+    char shown[1024];
+    progress_clear(m->j->bar);
+    fprintf(stderr, "clwhitted-mpi: %s\n", sys_escape(shown, sizeof shown, m->err));
+    fflush(stderr);
+    MPI_Abort(MPI_COMM_WORLD, 1);
+}
+
 /* A busy rank silent for longer than the timeout: the job cannot end cleanly (the rank may
  * hang in a driver), so it is aborted here. */
 static void master_watchdog(master *m)
 {
     double now = sys_now();
-    char shown[1024];
     int w;
     if (m->j->timeout_s <= 0)
         return;
     for (w = 1; w < m->j->size; w++)
         if (m->active[w] && m->nassigned[w] > 0 && now - m->last_seen[w] > m->j->timeout_s) {
-            progress_clear(m->j->bar);
             snprintf(m->err, m->errlen,
                      "rank %d sent nothing for %.0f s (killed or hung?); ending the job with no "
                      "image",
                      w, now - m->last_seen[w]);
-            fprintf(stderr, "clwhitted-mpi: %s\n", sys_escape(shown, sizeof shown, m->err));
-            fflush(stderr);
-            MPI_Abort(MPI_COMM_WORLD, 1);
+            master_abort(m);
         }
 }
 
@@ -213,7 +220,7 @@ static int master_callback(void *ctx, double fraction, unsigned long long rays)
     m->own_fraction = fraction;
     m->own_rays = rays;
     if (master_serve(m) != 0)
-        m->failed = 2; /* an MPI error: err holds it */
+        master_abort(m);
     master_progress(m);
     return m->failed != 0;
 }
@@ -248,9 +255,9 @@ int mwork_master(const mwork_job *j, float *acc, mwork_rank *mine, char *err, si
     m.rays = calloc((size_t)j->size, sizeof *m.rays);
     if (!m.assigned || !m.nassigned || !m.active || !m.last_seen || !m.rays) {
         snprintf(err, errlen, "out of memory");
-        m.failed = 1;
+        master_abort(&m);
     }
-    for (w = 0; !m.failed && w < j->size; w++) {
+    for (w = 0; w < j->size; w++) {
         m.active[w] = w > 0;
         m.last_seen[w] = now;
     }
@@ -273,17 +280,14 @@ int mwork_master(const mwork_job *j, float *acc, mwork_rank *mine, char *err, si
         master_progress(&m);
     }
     renderer_set_progress(j->r, NULL, NULL);
-    if (m.failed == 2)
-        goto out_free; /* MPI itself failed: no more messages */
-    /* the other ranks' last tiles, then every rank told to stop */
+    /* the other ranks' last tiles, then every rank done */
     while (any_active(&m)) {
         if (master_serve(&m) != 0)
-            goto out_free;
+            master_abort(&m);
         master_progress(&m);
         nap();
     }
     rc = m.failed ? -1 : 0;
-out_free:
     free(m.assigned);
     free(m.nassigned);
     free(m.active);

@@ -36,8 +36,9 @@ typedef struct {
 int mwork_tile_rows(int width, int height, int ranks, int env_rows);
 
 /* Rank 0: the whole accumulation image into acc (width * height * 4 floats). Returns 0, or
- * -1 with err (naming the rank at fault); every other rank has then been told to stop,
- * except when a rank fell silent (the job is then aborted: see mpi_work.c). */
+ * -1 with err (naming the rank at fault) once every other rank has stopped. When the
+ * others cannot be stopped (a rank silent for timeout_s, an MPI error, a broken message)
+ * it prints why and aborts the job (MPI_Abort). */
 int mwork_master(const mwork_job *j, float *acc, mwork_rank *mine, char *err, size_t errlen);
 
 /* Every other rank: renders the tiles rank 0 hands out until told to stop. Returns 0, or
