@@ -197,10 +197,10 @@ static void report(const job *j, const mwork_rank *all, double render_s, double 
     rays = sum.eye_rays + sum.shadow_rays + sum.secondary_rays;
     progress_format_rate(rate, sizeof rate, render_s > 0 ? (double)rays / render_s * 1e-6 : 0);
     if (!j->o.quiet)
-        printf("clwhitted-mpi: wrote %s (%dx%d, depth %d) in %.3f s on %d ranks: render %.3f s, "
-               "%s Mrays/s\n",
+        printf("clwhitted-mpi: wrote %s (%dx%d, depth %d) in %.3f s on %d rank%s: render %.3f "
+               "s, %s Mrays/s\n",
                sys_escape(shown, sizeof shown, j->output), j->s.width, j->s.height, j->s.max_depth,
-               total_s, j->size, render_s, rate);
+               total_s, j->size, j->size == 1 ? "" : "s", render_s, rate);
     if (!j->o.settings.stats)
         return;
     printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu (hit %llu)\n",
