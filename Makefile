@@ -36,7 +36,7 @@ CFLAGS  += $(WARN) $(OPT) -pthread $(PKG_CFLAGS) $(GUI_CFLAGS)
 
 # Host modules: every host/*.c but main.c goes into a static library that clwhitted, the
 # tools and the tests link, so each program holds only the objects it uses.
-LIB_SRC := $(filter-out host/main.c,$(wildcard host/*.c))
+LIB_SRC := $(filter-out host/main.c $(wildcard host/mpi_*.c),$(wildcard host/*.c))
 LIB_OBJ := $(patsubst host/%.c,$(BUILD)/%.o,$(LIB_SRC)) $(BUILD)/kernels_src.o
 LIB     := $(BUILD)/libclwhitted.a
 TEST_SRC := $(wildcard tests/test_*.c)
@@ -72,6 +72,23 @@ $(LIB): $(LIB_OBJ)
 
 $(BUILD)/clwhitted: $(BUILD)/main.o $(LIB)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+
+# clwhitted-mpi (docs/mpi.md): host/mpi_*.c and the library, built by mpicc (driving $(CC))
+# only where mpicc is found; without MPI everything else builds as before.
+MPICC    ?= mpicc
+HAVE_MPI := $(if $(shell command -v $(MPICC) 2>/dev/null),1)
+MPI_CC    = OMPI_CC='$(CC)' MPICH_CC='$(CC)' $(MPICC)
+MPI_OBJ  := $(patsubst host/%.c,$(BUILD)/%.o,$(wildcard host/mpi_*.c))
+ifeq ($(HAVE_MPI),1)
+all: $(BUILD)/clwhitted-mpi
+test: $(BUILD)/clwhitted-mpi
+endif
+
+$(BUILD)/mpi_%.o: host/mpi_%.c | $(BUILD)
+	$(MPI_CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) -c $< -o $@
+
+$(BUILD)/clwhitted-mpi: $(MPI_OBJ) $(LIB)
+	$(MPI_CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 
 # Converts a scene to POV-Ray SDL with the same model (for comparisons and benchmarks).
 $(BUILD)/scene2pov: tools/scene2pov.c $(LIB) | $(BUILD)
@@ -116,6 +133,7 @@ test: deps-dev $(BUILD)/clwhitted $(TEST_BIN)
 	sh tests/quality.sh $(BUILD)/clwhitted $(BUILD)/imgtool || fail=1; \
 	sh tests/docs.sh $(BUILD)/clwhitted || fail=1; \
 	sh tests/bench.sh $(BUILD) || fail=1; \
+	sh tests/mpi.sh $(BUILD) || fail=1; \
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
 
 # The installed binary needs nothing else at run time: the kernels are embedded.

@@ -16,6 +16,7 @@
 #include "devscene.h"
 #include "render_impl.h"
 #include "render_pass.h"
+#include "render_rows.h"
 #include "sys.h"
 #include "world.h"
 
@@ -363,7 +364,7 @@ static float *read_accumulation(renderer *r, char *err, size_t errlen)
 
 int renderer_read(renderer *r, image *img, char *err, size_t errlen)
 {
-    size_t n, i;
+    size_t n;
     float *px;
 
     if (rpass_need_scene(r, err, errlen))
@@ -377,12 +378,7 @@ int renderer_read(renderer *r, image *img, char *err, size_t errlen)
         free(px);
         return -1;
     }
-    for (i = 0; i < n; i++) {
-        float w = px[4 * i + 3] > 0 ? 1.0f / px[4 * i + 3] : 0.0f;
-        img->rgb[3 * i + 0] = px[4 * i + 0] * w;
-        img->rgb[3 * i + 1] = px[4 * i + 1] * w;
-        img->rgb[3 * i + 2] = px[4 * i + 2] * w;
-    }
+    rrows_resolve_mean(px, img);
     free(px);
     return 0;
 }
@@ -409,27 +405,15 @@ static int trace_all(renderer *r, int spp, char *err, size_t errlen)
     return 0;
 }
 
-/* The SPD procedure: rays through the (nx+1) x (ny+1) pixel corners, the four corners of
- * each pixel averaged. The corners are the centres of an (nx+1) x (ny+1) image whose
- * window is half a pixel wider on every side (of a crop: the corners of its pixels in
- * the full image's grid of corners). */
+/* The SPD procedure: rays through the (nx+1) x (ny+1) pixel corners (rrows_spd_frame),
+ * the four corners of each pixel averaged. */
 static int render_spd(renderer *r, image *img, char *err, size_t errlen)
 {
     cw_frame saved = r->host_frame;
-    cw_frame *f = &r->host_frame;
-    float pu = (saved.window.y - saved.window.x) / (float)saved.cam_nx;
-    float pv = (saved.window.w - saved.window.z) / (float)saved.cam_ny;
     float *px = NULL;
-    int i, j, rc = -1, cx = saved.nx + 1;
+    int rc = -1;
 
-    f->nx = saved.nx + 1;
-    f->ny = saved.ny + 1;
-    f->cam_nx = saved.cam_nx + 1;
-    f->cam_ny = saved.cam_ny + 1;
-    f->window.x = saved.window.x - 0.5f * pu;
-    f->window.y = saved.window.y + 0.5f * pu;
-    f->window.z = saved.window.z - 0.5f * pv;
-    f->window.w = saved.window.w + 0.5f * pv;
+    rrows_spd_frame(&saved, &r->host_frame);
     if (write_frame(r, err, errlen) || trace_all(r, 1, err, errlen))
         goto out_restore;
     px = read_accumulation(r, err, errlen);
@@ -439,14 +423,7 @@ static int render_spd(renderer *r, image *img, char *err, size_t errlen)
         snprintf(err, errlen, "out of memory for a %dx%d image", saved.nx, saved.ny);
         goto out_restore;
     }
-    for (j = 0; j < saved.ny; j++)
-        for (i = 0; i < saved.nx; i++) {
-            const float *c00 = &px[4 * (j * cx + i)], *c01 = &px[4 * (j * cx + i + 1)];
-            const float *c10 = &px[4 * ((j + 1) * cx + i)], *c11 = &px[4 * ((j + 1) * cx + i + 1)];
-            int c;
-            for (c = 0; c < 3; c++)
-                img->rgb[3 * (j * saved.nx + i) + c] = 0.25f * (c00[c] + c01[c] + c10[c] + c11[c]);
-        }
+    rrows_resolve_spd(px, img);
     rc = 0;
 out_restore:
     free(px);
@@ -519,12 +496,7 @@ int renderer_render(renderer *r, image *img, char *err, size_t errlen)
     if (rc != 0)
         goto out_restore;
     t0 = sys_now();
-    r->stats.eye_rays = r->stats.eye_hits = 0;
-    r->stats.shadow_rays = r->stats.shadow_blocked = 0;
-    r->stats.secondary_rays = r->stats.secondary_hits = 0;
-    r->stats.passes = 0;
-    r->stats.raygen_s = r->stats.intersect_s = r->stats.shade_s = r->stats.occlude_s = 0;
-    r->stats.pixel_s = 0;
+    renderer_reset_trace_stats(r);
     if (r->settings.spd)
         rc = render_spd(r, img, err, errlen);
     else

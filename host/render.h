@@ -116,4 +116,21 @@ int renderer_set_view(renderer *r, const scene *s, char *err, size_t errlen);
 int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size_t errlen);
 int renderer_read(renderer *r, image *img, char *err, size_t errlen);
 
+/* Splitting one render over processes (clwhitted-mpi): each renders bands of rows of the
+ * accumulation image, one process puts them together and makes the image. The result is
+ * the whole-image render's bit for bit with the per-pixel strategy (each pixel's samples
+ * are added in the same order); the wavefront's transmitted light is added atomically,
+ * in no fixed order, by every render.
+ * renderer_accum_size: the accumulation image's size, the image's (one more each way with
+ * settings.spd: the pixel corners).
+ * renderer_render_rows: every sample (or the corner rays) of accumulation rows
+ * [row0, row0 + nrows), read back into acc as nrows * width * 4 floats (rgb and the sample
+ * count per pixel). Ray counts and trace_s add up over calls until
+ * renderer_reset_trace_stats (which renderer_render calls).
+ * renderer_resolve: the image (allocated here) from a whole accumulation image. */
+void renderer_accum_size(const renderer *r, int *width, int *height);
+int renderer_render_rows(renderer *r, int row0, int nrows, float *acc, char *err, size_t errlen);
+int renderer_resolve(const renderer *r, const float *acc, image *img, char *err, size_t errlen);
+void renderer_reset_trace_stats(renderer *r);
+
 #endif

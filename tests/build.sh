@@ -18,13 +18,20 @@ mk() { MAKEFLAGS= MFLAGS= make -s "$@"; }
 
 CPP="cc -D_POSIX_C_SOURCE=200809L -DCL_TARGET_OPENCL_VERSION=120 -Ihost -Ikernels -Itests -I$B $(pkg-config --cflags libpng libcjson OpenEXR glfw3 x11 2>/dev/null)"
 # Which files include which headers, by the compiler: one line "TARGET: deps..." per source.
+# clwhitted-mpi's sources need mpi.h: mpicc's, where clwhitted-mpi is built.
+MPICPP="OMPI_CC=cc mpicc ${CPP#cc }"
+mpi_target=
+[ -x "$B/clwhitted-mpi" ] && mpi_target="$B/clwhitted-mpi"
 for f in host/*.c tests/test_*.c; do
+    cpp=$CPP
     case $f in
+        host/mpi_*) [ -n "$mpi_target" ] || continue
+            t="$B/$(basename "$f" .c).o"; cpp="env $MPICPP" ;;
         host/*) t="$B/$(basename "$f" .c).o" ;;
         tests/*) t="$B/$(basename "$f" .c)" ;;
     esac
     # shellcheck disable=SC2086
-    deps=$($CPP -MM "$f" 2>/dev/null | tr -d '\\\n' | cut -d: -f2)
+    deps=$($cpp -MM "$f" 2>/dev/null | tr -d '\\\n' | cut -d: -f2)
     echo "$t: $deps" >>"$T/deps"
 done
 # The kernel program: kernels/clwhitted.cl and every header it includes, as OpenCL C.
@@ -34,7 +41,7 @@ kdeps=$(cc -x c -D__OPENCL_VERSION__=120 -Ikernels -MM kernels/clwhitted.cl 2>/d
 echo "$B/kernels_src.c: $kdeps" >>"$T/deps"
 check_true "dependencies found" test "$(wc -l <"$T/deps")" -gt 20
 
-targets="$B/clwhitted $(ls tests/test_*.c | sed "s|tests/\(.*\)\.c|$B/\1|")"
+targets="$B/clwhitted $mpi_target $(ls tests/test_*.c | sed "s|tests/\(.*\)\.c|$B/\1|")"
 for h in host/*.h kernels/*.h; do
     # shellcheck disable=SC2086
     mk BUILD="$B" -n -W "$h" $targets >"$T/plan" 2>&1
