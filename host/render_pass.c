@@ -198,6 +198,19 @@ int rpass_clear_accumulation(renderer *r, char *err, size_t errlen)
            rpass_fill_zero(r, r->image, n * 4 * sizeof(cl_float), "image", err, errlen);
 }
 
+int rpass_clear_rows(renderer *r, int row0, int nrows, char *err, size_t errlen)
+{
+    size_t row_bytes = (size_t)r->host_frame.nx * 4 * sizeof(cl_float);
+    cl_int zero = 0, e;
+    if (rpass_ensure_image(r, err, errlen))
+        return -1;
+    e = clEnqueueFillBuffer(r->queue, r->image, &zero, sizeof zero, row_bytes * (size_t)row0,
+                            row_bytes * (size_t)nrows, 0, NULL, NULL);
+    if (e != CL_SUCCESS)
+        return rpass_fail(e, "clEnqueueFillBuffer(image rows)", r, err, errlen);
+    return 0;
+}
+
 int rpass_band_rows(const renderer *r)
 {
     size_t per_ray = 2 * sizeof(cw_ray) + sizeof(cw_hit) +

@@ -33,6 +33,8 @@ int rpass_write(renderer *r, cl_mem m, size_t size, const void *src, const char 
  * rpass_clear_accumulation also zeroes the image. */
 int rpass_ensure_image(renderer *r, char *err, size_t errlen);
 int rpass_clear_accumulation(renderer *r, char *err, size_t errlen);
+/* Zeroes rows [row0, row0 + nrows) of the accumulation image (allocating it if need be). */
+int rpass_clear_rows(renderer *r, int row0, int nrows, char *err, size_t errlen);
 
 /* Rows per band: the wavefront's ray queues, hits and shadow rays stay within about 64 MB.
  * The per-pixel strategy uses the same bands (so that its pass counts are the wavefront's)

@@ -76,14 +76,10 @@ static int rows_trace(renderer *r, int spp, int row0, int nrows, float *acc, cha
 {
     size_t row_bytes = (size_t)r->host_frame.nx * 4 * sizeof(cl_float);
     int k, y, band = rpass_band_rows(r);
-    cl_int zero = 0, e;
+    cl_int e;
 
-    if (rpass_ensure_image(r, err, errlen))
+    if (rpass_clear_rows(r, row0, nrows, err, errlen))
         return -1;
-    e = clEnqueueFillBuffer(r->queue, r->image, &zero, sizeof zero, row_bytes * (size_t)row0,
-                            row_bytes * (size_t)nrows, 0, NULL, NULL);
-    if (e != CL_SUCCESS)
-        return rpass_fail(e, "clEnqueueFillBuffer(image rows)", r, err, errlen);
     for (k = 0; k < spp; k++)
         for (y = row0; y < row0 + nrows; y += band) {
             int n = y + band > row0 + nrows ? row0 + nrows - y : band;

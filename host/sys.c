@@ -175,7 +175,8 @@ int sys_read_file(const char *path, size_t max_bytes, int stop_at_nul, const cha
 
 /* The temporary files that exist now, for the signal handler to remove, and the progress
  * line on the terminal, for it to clear. A slot is filled before it is marked used, and the
- * handler only reads: it unlinks, writes and ends the process (async-signal-safe calls). */
+ * handler only reads: it unlinks, writes and re-raises the signal (async-signal-safe
+ * calls). */
 #define SIG_SLOTS 8
 #define SIG_PATH 4096
 static char sig_tmp[SIG_SLOTS][SIG_PATH];
@@ -201,7 +202,12 @@ static void on_fatal_signal(int sig)
         w = write(fd, "\r", 1);
         (void)w;
     }
-    _exit(128 + sig);
+    /* End by the signal itself, with its default action, once the handler returns (the
+     * signal is blocked until then): the parent sees it (a shell: 128 + the signal, and a
+     * shell loop stops on Ctrl-C), and no exit hook runs (a sanitizer's _exit hook takes
+     * locks the signal may have interrupted, and hung). */
+    (void)signal(sig, SIG_DFL);
+    (void)raise(sig);
 }
 
 void sys_signals_install(void)
