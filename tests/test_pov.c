@@ -335,7 +335,7 @@ static void one_sphere_scene(scene *s, scene_material m)
     scene_light l;
     char err[256];
     scene_init(s);
-    s->camera.eye = vec3f_make(0, 0, 5);
+    s->camera.eye = vec3d_make(0, 0, 5);
     assert_int_equal(scene_camera_basis(&s->camera, vec3f_make(0, 0, -1), vec3f_make(0, 1, 0)), 0);
     s->camera.l = -1;
     s->camera.r = 1;
@@ -343,11 +343,11 @@ static void one_sphere_scene(scene *s, scene_material m)
     s->camera.t = 0.75f;
     s->camera.d = 2;
     assert_true(scene_push(&s->materials, &m, sizeof m) == 0);
-    sp.center = vec3f_make(0, 0, 0);
+    sp.center = vec3d_make(0, 0, 0);
     sp.radius = -1.5f;
     sp.material = 0;
     assert_true(scene_push(&s->spheres, &sp, sizeof sp) == 0);
-    l.position = vec3f_make(3, 4, 5);
+    l.position = vec3d_make(3, 4, 5);
     l.intensity = vec3f_make(0.5f, 0.6f, 0.7f);
     assert_true(scene_push(&s->lights, &l, sizeof l) == 0);
     assert_int_equal(scene_finish(s, 32, 24, 3, err, sizeof err), 0);

@@ -304,8 +304,8 @@ static void add_polygon(scene *s, const vec3f *v, int n)
 static void add_cone(scene *s, vec3f base, float r0, vec3f apex, float r1)
 {
     scene_cone c;
-    c.base = base;
-    c.apex = apex;
+    c.base = tu_d(base);
+    c.apex = tu_d(apex);
     c.base_radius = r0;
     c.apex_radius = r1;
     c.material = 0;
@@ -335,7 +335,7 @@ static void host_world_init(host_world *hw, const scene *s)
     char msg[256];
     devscene_world a;
     memset(&hw->w, 0, sizeof hw->w);
-    if (devscene_convert(s, &hw->d, msg, sizeof msg) != 0)
+    if (devscene_convert(s, NULL, &hw->d, msg, sizeof msg) != 0)
         fail_msg("%s", msg);
     devscene_world_arrays(&hw->d, &a);
 #define HOST_WORLD_BIND(type, name, what) hw->w.name = a.name;
@@ -1509,14 +1509,14 @@ static void test_degenerate_zero_area(void **state)
         image img;
         dbasis(w, &u, &v);
         s.camera.projection = SCENE_ORTHOGRAPHIC;
-        s.camera.eye = vec3f_make(repro.origin.x, repro.origin.y, repro.origin.z);
+        s.camera.eye = vec3d_make(repro.origin.x, repro.origin.y, repro.origin.z);
         s.camera.w = vec3f_make(-repro.dir.x, -repro.dir.y, -repro.dir.z);
         s.camera.u = fv(u);
         s.camera.v = fv(v);
         s.camera.l = s.camera.b = -1e-3f;
         s.camera.r = s.camera.t = 1e-3f;
         s.background = vec3f_make(0.25f, 0.5f, 0.75f);
-        l.position = vec3f_make(3, 4, 5);
+        l.position = vec3d_make(3, 4, 5);
         l.intensity = vec3f_make(1, 1, 1);
         assert_true(scene_push(&s.lights, &l, sizeof l) >= 0);
         upload(&s);
@@ -1788,9 +1788,10 @@ static void test_parallel_rays(void **state)
 
 /* ---- 6. image invariance ------------------------------------------------------------------ */
 
-static vec3f xf(vec3f p, double scale, dvec off)
+static vec3d xf(vec3d p, double scale, dvec off)
 {
-    return fv(dadd(off, dscale(dv(p.x, p.y, p.z), scale)));
+    dvec q = dadd(off, dscale(dv(p.x, p.y, p.z), scale));
+    return vec3d_make(q.x, q.y, q.z);
 }
 
 /* Scales the whole scene by `scale` about the origin, then moves it by off: camera, lights,
@@ -1810,7 +1811,7 @@ static void transform_scene(scene *s, double scale, dvec off)
             SCENE_AT(s->triangles, scene_triangle, i).p[k] =
                 xf(SCENE_AT(s->triangles, scene_triangle, i).p[k], scale, off);
     for (i = 0; i < s->poly_verts.count; i++)
-        SCENE_AT(s->poly_verts, vec3f, i) = xf(SCENE_AT(s->poly_verts, vec3f, i), scale, off);
+        SCENE_AT(s->poly_verts, vec3d, i) = xf(SCENE_AT(s->poly_verts, vec3d, i), scale, off);
     for (i = 0; i < s->lights.count; i++)
         SCENE_AT(s->lights, scene_light, i).position =
             xf(SCENE_AT(s->lights, scene_light, i).position, scale, off);
