@@ -28,8 +28,8 @@ enum scene_projection {
 };
 
 typedef struct {
+    vec3d eye; /* first: no padding, so that cameras compare with memcmp */
     enum scene_projection projection;
-    vec3d eye;
     vec3f u, v, w;       /* orthonormal viewing basis, w points backwards (away from the view) */
     float l, r, b, t;    /* image-plane window, in u and v units */
     float d;             /* perspective: distance from eye to image plane */

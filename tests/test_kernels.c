@@ -12,7 +12,7 @@
 #include "render_debug.h"
 #include "scene.h"
 
-TU_RENDERER_FIXTURE(1)
+TU_RENDERER_FIXTURE_AT(1, 1) /* rays in world coordinates */
 static char err[2048];
 
 /* A camera at eye with basis x, y, z (w = +z), window [-1,1]^2, d = 1. */

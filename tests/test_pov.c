@@ -476,16 +476,16 @@ static void test_write_polygon_on_plane(void **state)
     /* a quad slightly off its plane comes out exactly on the renderer's plane */
     scene s;
     scene_polygon pg;
-    vec3f v[4];
+    vec3d v[4];
     char err[256], *out, *p;
     int rc, k;
     double pts[5][3];
     (void)state;
     one_sphere_scene(&s, grey_material());
-    v[0] = vec3f_make(-1.03f, -0.97f, -3.0171f);
-    v[1] = vec3f_make(1.01f, -1.02f, -3.2f);
-    v[2] = vec3f_make(0.99f, 1.07f, -3.3f);
-    v[3] = vec3f_make(-1.1f, 0.93f, -3.1f + 1e-3f);
+    v[0] = vec3d_make(-1.03f, -0.97f, -3.0171f);
+    v[1] = vec3d_make(1.01f, -1.02f, -3.2f);
+    v[2] = vec3d_make(0.99f, 1.07f, -3.3f);
+    v[3] = vec3d_make(-1.1f, 0.93f, -3.1f + 1e-3f);
     for (k = 0; k < 4; k++)
         assert_true(scene_push(&s.poly_verts, &v[k], sizeof v[k]) >= 0);
     pg.first = 0;

@@ -195,7 +195,7 @@ static void test_nff_entities(void **state)
     assert_int_equal(pg->count, 5);
     assert_int_equal(pg->material, 1);
     assert_int_equal(s.poly_verts.count, 5);
-    assert_vec(SCENE_AT(s.poly_verts, vec3f, 3), 1, 2, 0);
+    assert_pos(SCENE_AT(s.poly_verts, vec3d, 3), 1, 2, 0);
 
     /* cones, in both layouts */
     assert_int_equal(s.cones.count, 2);
@@ -613,7 +613,7 @@ static void test_json_all(void **state)
     assert_int_equal(SCENE_AT(s.polygons, scene_polygon, 0).count, 5);
     assert_int_equal(SCENE_AT(s.polygons, scene_polygon, 0).first, 0);
     assert_int_equal(SCENE_AT(s.polygons, scene_polygon, 0).material, 0);
-    assert_vec(SCENE_AT(s.poly_verts, vec3f, 3), 1, 2, 0);
+    assert_pos(SCENE_AT(s.poly_verts, vec3d, 3), 1, 2, 0);
     assert_int_equal(s.cones.count, 0);
 
     assert_int_equal(scene_finish(&s, 0, 0, 0, err, sizeof err), 0);

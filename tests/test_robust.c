@@ -73,6 +73,9 @@ static int setup(void **state)
     (void)state;
     if (tu_renderer_open(&R, 1) != 0 || tu_renderer_open(&RF, 0) != 0)
         return -1;
+    /* rays in world coordinates through the test hooks (the image test sets the default) */
+    renderer_debug_world_origin(R, 1);
+    renderer_debug_world_origin(RF, 1);
     render_settings_default(&st);
     st.precision = RENDER_FAST;
     if (renderer_set_settings(RF, &st, err, sizeof err) != 0) {

@@ -28,7 +28,7 @@
 
 #define PI 3.14159265358979323846
 
-TU_RENDERER_FIXTURE(1)
+TU_RENDERER_FIXTURE_AT(1, 1) /* rays in world coordinates */
 static char err[2048];
 
 /* ======================================================================================== */

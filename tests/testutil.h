@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "render.h"
+#include "render_debug.h"
 #include "scene.h"
 #include "scene_geom.h"
 #include "types.h"
@@ -166,18 +167,24 @@ static inline int tu_renderer_close(renderer **r)
 }
 
 /* A suite's group fixture: defines `static renderer *R` and the cmocka group functions
- * setup() and teardown() that open and close it (tu_renderer_open). */
-#define TU_RENDERER_FIXTURE(show_device)                                                           \
+ * setup() and teardown() that open and close it (tu_renderer_open). With world_origin set,
+ * the kernels see world coordinates (renderer_debug_world_origin): for the suites that give
+ * the kernels rays in world coordinates through the test hooks, or expect them back. */
+#define TU_RENDERER_FIXTURE_AT(show_device, world_origin)                                          \
     static renderer *R;                                                                            \
     static int setup(void **state)                                                                 \
     {                                                                                              \
         (void)state;                                                                               \
-        return tu_renderer_open(&R, show_device);                                                  \
+        if (tu_renderer_open(&R, show_device) != 0)                                                \
+            return -1;                                                                             \
+        renderer_debug_world_origin(R, world_origin);                                              \
+        return 0;                                                                                  \
     }                                                                                              \
     static int teardown(void **state)                                                              \
     {                                                                                              \
         (void)state;                                                                               \
         return tu_renderer_close(&R);                                                              \
     }
+#define TU_RENDERER_FIXTURE(show_device) TU_RENDERER_FIXTURE_AT(show_device, 0)
 
 #endif
