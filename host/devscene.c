@@ -206,8 +206,7 @@ static int polygon_bands(devscene *ds, cw_polygon *pg)
     return 0;
 }
 
-int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *err,
-                     size_t errlen)
+int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *err, size_t errlen)
 {
     size_t i, nprim = s->spheres.count + s->triangles.count + s->polygons.count + s->cones.count;
     size_t k;

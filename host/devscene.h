@@ -61,8 +61,7 @@ cw_float4 devscene_f4(vec3f v, float w);
  * in double: with the camera's eye as the origin, what a ray meets near the viewer keeps
  * full float precision however far the scene is from 0 (docs/model.md). Returns 0, or -1
  * with err (too many primitives, out of memory); call devscene_free either way. */
-int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *err,
-                     size_t errlen);
+int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *err, size_t errlen);
 
 /* Builds the BVH over the boxes, collapses it to the wide tree the kernels traverse, turns
  * its leaf entries into CW_REFs and packs its leaves of triangles only into blocks of four

@@ -265,8 +265,7 @@ static int same_scene(const scene *a, const scene *b)
            memcmp(&a->background, &b->background, sizeof(vec3f)) == 0 &&
            memcmp(&a->ambient, &b->ambient, sizeof(vec3f)) == 0 &&
            same_array(&a->materials, &b->materials, sizeof(scene_material)) &&
-           same_lights_cones(a, b) &&
-           same_array(&a->spheres, &b->spheres, sizeof(scene_sphere)) &&
+           same_lights_cones(a, b) && same_array(&a->spheres, &b->spheres, sizeof(scene_sphere)) &&
            same_array(&a->triangles, &b->triangles, sizeof(scene_triangle)) &&
            same_array(&a->tri_normals, &b->tri_normals, sizeof(vec3f)) &&
            same_array(&a->polygons, &b->polygons, sizeof(scene_polygon)) &&
