@@ -59,6 +59,13 @@ cw_float4 devscene_f4(vec3f v, float w)
     return r;
 }
 
+/* A world position in the kernels' coordinates: relative to the local origin, rounded to
+ * float once (the difference is taken in double). */
+static cw_float4 local4(const devscene *ds, vec3d p, float w)
+{
+    return devscene_f4(vec3d_diff(p, ds->origin), w);
+}
+
 static void find_materials(const scene *s, devscene *ft)
 {
     size_t i;
@@ -199,12 +206,13 @@ static int polygon_bands(devscene *ds, cw_polygon *pg)
     return 0;
 }
 
-int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
+int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *err, size_t errlen)
 {
     size_t i, nprim = s->spheres.count + s->triangles.count + s->polygons.count + s->cones.count;
     size_t k;
 
     memset(ds, 0, sizeof *ds);
+    ds->origin = origin ? *origin : vec3d_make(0, 0, 0);
     if (nprim > (size_t)1 << 28) {
         snprintf(err, errlen, "%zu primitives: more than the 2^28 the renderer can address", nprim);
         return -1;
@@ -231,25 +239,29 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
         bvh_box b;
         if (!(rad > 0))
             continue; /* no surface */
-        ds->sph[ds->nsph].center = devscene_f4(ss->center, rad);
+        cw_float4 c = local4(ds, ss->center, rad);
+        ds->sph[ds->nsph].center = c;
         ds->sph[ds->nsph].material = ss->material;
         box_empty(b.lo, b.hi);
-        box_add_point(b.lo, b.hi, ss->center.x - rad, ss->center.y - rad, ss->center.z - rad);
-        box_add_point(b.lo, b.hi, ss->center.x + rad, ss->center.y + rad, ss->center.z + rad);
+        box_add_point(b.lo, b.hi, c.x - rad, c.y - rad, c.z - rad);
+        box_add_point(b.lo, b.hi, c.x + rad, c.y + rad, c.z + rad);
         push_box(ds, &b, CW_REF(CW_PRIM_SPHERE, ds->nsph));
         ds->nsph++;
     }
     for (i = 0; i < s->triangles.count; i++) {
         const scene_triangle *st = &SCENE_AT(s->triangles, scene_triangle, i);
         const vec3f *n;
-        if (scene_triangle_degenerate(st))
+        vec3f p[3];
+        for (k = 0; k < 3; k++)
+            p[k] = vec3d_diff(st->p[k], ds->origin);
+        if (scene_triangle_degenerate(p))
             continue; /* no area, no normal */
         cw_triangle *t = &ds->tri[ds->ntri];
         bvh_box b;
         box_empty(b.lo, b.hi);
-        t->p0 = devscene_f4(st->p[0], 0);
-        t->p1 = devscene_f4(st->p[1], 0);
-        t->p2 = devscene_f4(st->p[2], 0);
+        t->p0 = devscene_f4(p[0], 0);
+        t->p1 = devscene_f4(p[1], 0);
+        t->p2 = devscene_f4(p[2], 0);
         t->material = st->material;
         t->normals = -1;
         if ((n = scene_triangle_normals(s, st)) != NULL) {
@@ -258,20 +270,20 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
                 ds->normals[ds->nnorm++] = devscene_f4(n[k], 0);
         }
         for (k = 0; k < 3; k++)
-            box_add_point(b.lo, b.hi, st->p[k].x, st->p[k].y, st->p[k].z);
+            box_add_point(b.lo, b.hi, p[k].x, p[k].y, p[k].z);
         push_box(ds, &b, CW_REF(CW_PRIM_TRIANGLE, ds->ntri));
         ds->ntri++;
     }
     for (i = 0; i < s->poly_verts.count; i++)
-        ds->verts[i] = devscene_f4(SCENE_AT(s->poly_verts, vec3f, i), 0);
+        ds->verts[i] = local4(ds, SCENE_AT(s->poly_verts, vec3d, i), 0);
     for (i = 0; i < s->polygons.count; i++) {
         const scene_polygon *sp = &SCENE_AT(s->polygons, scene_polygon, i);
-        const vec3f *v = &SCENE_AT(s->poly_verts, vec3f, sp->first);
+        const vec3d *v = &SCENE_AT(s->poly_verts, vec3d, sp->first);
         cw_polygon *pg = &ds->pg[ds->npg];
         double nn[3], off;
-        int axis, j;
+        int axis;
         bvh_box b;
-        if (scene_polygon_plane(v, sp->count, nn, &off, &axis) != 0)
+        if (scene_polygon_plane(v, sp->count, &ds->origin, nn, &off, &axis) != 0)
             continue; /* degenerate: no area, cannot be hit */
         pg->plane.x = (float)nn[0];
         pg->plane.y = (float)nn[1];
@@ -281,10 +293,12 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
         pg->count = sp->count;
         pg->material = sp->material;
         pg->axis = axis;
+        box_empty(b.lo, b.hi);
         { /* the kernels read the vertices projected along the dominant axis */
             int pj;
             for (pj = 0; pj < sp->count; pj++) {
-                vec3f pv = SCENE_AT(s->poly_verts, vec3f, (size_t)(sp->first + pj));
+                vec3f pv = vec3d_diff(v[pj], ds->origin);
+                box_add_point(b.lo, b.hi, pv.x, pv.y, pv.z);
                 ds->verts[sp->first + pj] = isect_polygon_vertex(v3(pv.x, pv.y, pv.z), axis);
             }
         }
@@ -292,27 +306,25 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
             snprintf(err, errlen, "out of memory for polygon edge bands");
             return -1;
         }
-        box_empty(b.lo, b.hi);
-        for (j = 0; j < sp->count; j++)
-            box_add_point(b.lo, b.hi, v[j].x, v[j].y, v[j].z);
         push_box(ds, &b, CW_REF(CW_PRIM_POLYGON, ds->npg));
         ds->npg++;
     }
     for (i = 0; i < s->cones.count; i++) {
         const scene_cone *sc = &SCENE_AT(s->cones, scene_cone, i);
         cw_cone *cn = &ds->cones[ds->ncone];
-        double ax = (double)sc->apex.x - sc->base.x, ay = (double)sc->apex.y - sc->base.y,
-               az = (double)sc->apex.z - sc->base.z;
+        double ax = sc->apex.x - sc->base.x, ay = sc->apex.y - sc->base.y,
+               az = sc->apex.z - sc->base.z;
         double h = sqrt(ax * ax + ay * ay + az * az);
         float r0 = fabsf(sc->base_radius), r1 = fabsf(sc->apex_radius);
         float a[3], c0[3], c1[3];
+        vec3f base = vec3d_diff(sc->base, ds->origin), apex = vec3d_diff(sc->apex, ds->origin);
         bvh_box b;
         if (!(h > 0) || !(r0 > 0 || r1 > 0))
             continue; /* no surface */
         a[0] = (float)(ax / h);
         a[1] = (float)(ay / h);
         a[2] = (float)(az / h);
-        cn->base = devscene_f4(sc->base, r0);
+        cn->base = devscene_f4(base, r0);
         cn->axis.x = a[0];
         cn->axis.y = a[1];
         cn->axis.z = a[2];
@@ -320,12 +332,12 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
         cn->apex_radius = r1;
         cn->slope = (r1 - r0) / cn->axis.w; /* as the kernels computed it per test */
         cn->material = sc->material;
-        c0[0] = sc->base.x;
-        c0[1] = sc->base.y;
-        c0[2] = sc->base.z;
-        c1[0] = sc->apex.x;
-        c1[1] = sc->apex.y;
-        c1[2] = sc->apex.z;
+        c0[0] = base.x;
+        c0[1] = base.y;
+        c0[2] = base.z;
+        c1[0] = apex.x;
+        c1[1] = apex.y;
+        c1[2] = apex.z;
         box_empty(b.lo, b.hi);
         box_add_disc(b.lo, b.hi, c0, a, r0);
         box_add_disc(b.lo, b.hi, c1, a, r1);
@@ -334,7 +346,7 @@ int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen)
     }
     for (i = 0; i < s->lights.count; i++) {
         const scene_light *sl = &SCENE_AT(s->lights, scene_light, i);
-        ds->lights[i].position = devscene_f4(sl->position, 0);
+        ds->lights[i].position = local4(ds, sl->position, 0);
         ds->lights[i].intensity = devscene_f4(sl->intensity, 0);
     }
     for (i = 0; i < s->materials.count; i++) {

@@ -33,6 +33,7 @@ typedef struct {
     int dropped;      /* primitives left out as degenerate */
     int mirrors;      /* some material has km > 0 */
     int transmitters; /* some material has kt > 0 */
+    vec3d origin;     /* the local origin: every position in the arrays is relative to it */
 } devscene;
 
 /* The host array behind each kernel buffer (kernels/world.h): for X(type, name, what), the
@@ -55,9 +56,12 @@ void devscene_free_array(devscene *ds, int which);
 
 cw_float4 devscene_f4(vec3f v, float w);
 
-/* Builds the arrays and the primitives' boxes (no BVH yet). Returns 0, or -1 with err
- * (too many primitives, out of memory); call devscene_free either way. */
-int devscene_convert(const scene *s, devscene *ds, char *err, size_t errlen);
+/* Builds the arrays and the primitives' boxes (no BVH yet). Every position is converted to
+ * float relative to the local origin `origin` (NULL: the world's), the difference taken
+ * in double: with the camera's eye as the origin, what a ray meets near the viewer keeps
+ * full float precision however far the scene is from 0 (docs/model.md). Returns 0, or -1
+ * with err (too many primitives, out of memory); call devscene_free either way. */
+int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *err, size_t errlen);
 
 /* Builds the BVH over the boxes, collapses it to the wide tree the kernels traverse, turns
  * its leaf entries into CW_REFs and packs its leaves of triangles only into blocks of four

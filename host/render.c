@@ -17,6 +17,7 @@
 #include "render_impl.h"
 #include "render_pass.h"
 #include "render_rows.h"
+#include "scene_geom.h"
 #include "sys.h"
 #include "world.h"
 
@@ -256,10 +257,10 @@ static int upload_world(renderer *r, devscene *ds, char *err, size_t errlen)
 }
 
 /* The view part of the frame: camera, size, depth, background and ambient. */
-static void fill_view(cw_frame *f, const scene *s)
+static void fill_view(cw_frame *f, const scene *s, vec3d origin)
 {
     const scene_camera *c = &s->camera;
-    f->eye = devscene_f4(c->eye, 0);
+    f->eye = devscene_f4(vec3d_diff(c->eye, origin), 0);
     f->u = devscene_f4(c->u, 0);
     f->v = devscene_f4(c->v, 0);
     f->w = devscene_f4(c->w, 0);
@@ -290,7 +291,9 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     release_scene(r);
     memset(f, 0, sizeof *f);
     r->stats.build_s = r->stats.compile_s = r->stats.upload_s = 0;
-    if (devscene_convert(s, &ds, err, errlen) != 0)
+    /* the local origin: the camera's eye (docs/model.md, "Far from the origin") */
+    r->origin = r->world_origin ? vec3d_make(0, 0, 0) : s->camera.eye;
+    if (devscene_convert(s, &r->origin, &ds, err, errlen) != 0)
         goto out_free;
     r->features.spheres = ds.nsph;
     r->features.triangles = ds.ntri;
@@ -303,7 +306,7 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
         goto out_free;
     r->stats.build_s = sys_now() - t0;
 
-    fill_view(f, s);
+    fill_view(f, s, r->origin);
     f->num_lights = (int)s->lights.count;
     f->num_nodes = ds.tree_wide.num_nodes;
     f->spd_rays = r->settings.spd;
@@ -525,7 +528,7 @@ int renderer_set_view(renderer *r, const scene *s, char *err, size_t errlen)
                  s->height, s->max_depth);
         return -1;
     }
-    fill_view(&r->host_frame, s);
+    fill_view(&r->host_frame, s, r->origin);
     return write_frame(r, err, errlen) || rpass_clear_accumulation(r, err, errlen);
 }
 

@@ -107,3 +107,8 @@ const char *renderer_build_options(const renderer *r)
 {
     return r->options;
 }
+
+void renderer_debug_world_origin(renderer *r, int on)
+{
+    r->world_origin = on != 0;
+}

@@ -21,6 +21,12 @@ int renderer_intersect(renderer *r, const cw_ray *rays, int n, cw_hit *hits, cha
 int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocked, char *err,
                       size_t errlen);
 
+/* on = 1: the scenes uploaded from now on keep 0 as their local origin, so that the
+ * kernels see plain float world coordinates (as before the local origin): for the test
+ * that shows what the local origin is for, and for the suites that trace rays given in
+ * world coordinates through the hooks above. on = 0: the camera's eye (the default). */
+void renderer_debug_world_origin(renderer *r, int on);
+
 /* The build options of the kernel program built last ("" before any build). */
 const char *renderer_build_options(const renderer *r);
 

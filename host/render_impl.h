@@ -38,6 +38,11 @@ struct renderer {
     cl_mem lights, materials;
     int have_scene;
     cw_frame host_frame;
+    /* the local origin of the uploaded scene (its camera's eye then): the kernels see every
+     * position, the eye of each later view included, relative to it; world_origin (a test
+     * hook) keeps it at 0, the plain float conversion of world coordinates */
+    vec3d origin;
+    int world_origin;
     clprog_features features;
     /* work buffers, grown on demand: two ray queues (this level's, the next), hits,
      * shadow rays, the accumulation image (rgb + sample count per pixel), counters */

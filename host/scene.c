@@ -57,7 +57,7 @@ long scene_push(scene_array *a, const void *elem, size_t elem_size)
     return (long)a->count++;
 }
 
-long scene_push_triangle(scene *s, const vec3f p[3], const vec3f *n, int material)
+long scene_push_triangle(scene *s, const vec3d p[3], const vec3f *n, int material)
 {
     scene_triangle t;
     memcpy(t.p, p, sizeof t.p);
@@ -106,6 +106,11 @@ static int finite3(vec3f a)
     return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
 }
 
+static int finite3d(vec3d a)
+{
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+
 static int known_projection(const scene_camera *c)
 {
     return c->projection == SCENE_PERSPECTIVE || c->projection == SCENE_ORTHOGRAPHIC ||
@@ -114,7 +119,7 @@ static int known_projection(const scene_camera *c)
 
 static int camera_finite(const scene_camera *c)
 {
-    return finite3(c->eye) && finite3(c->u) && finite3(c->v) && finite3(c->w) && finite3(c->dir) &&
+    return finite3d(c->eye) && finite3(c->u) && finite3(c->v) && finite3(c->w) && finite3(c->dir) &&
            isfinite(c->l) && isfinite(c->r) && isfinite(c->b) && isfinite(c->t) && isfinite(c->d);
 }
 
@@ -158,12 +163,12 @@ int scene_check(const scene *s, char *err, size_t errlen)
     }
     for (i = 0; i < s->lights.count; i++) {
         const scene_light *l = &SCENE_AT(s->lights, scene_light, i);
-        if (!finite3(l->position) || !finite3(l->intensity))
+        if (!finite3d(l->position) || !finite3(l->intensity))
             return fail_item(err, errlen, name, "light", i, "has non-finite values");
     }
     for (i = 0; i < s->spheres.count; i++) {
         const scene_sphere *sp = &SCENE_AT(s->spheres, scene_sphere, i);
-        if (!finite3(sp->center) || !isfinite(sp->radius))
+        if (!finite3d(sp->center) || !isfinite(sp->radius))
             return fail_item(err, errlen, name, "sphere", i, "has non-finite values");
         if (check_material_index(name, sp->material, nm, "sphere", i, err, errlen) != 0)
             return -1;
@@ -176,7 +181,7 @@ int scene_check(const scene *s, char *err, size_t errlen)
             return fail_item(err, errlen, name, "triangle", i, "has invalid vertex normals");
         n = scene_triangle_normals(s, t);
         for (k = 0; k < 3; k++)
-            if (!finite3(t->p[k]) || (n && !finite3(n[k])))
+            if (!finite3d(t->p[k]) || (n && !finite3(n[k])))
                 return fail_item(err, errlen, name, "triangle", i, "has non-finite values");
         if (n)
             for (k = 0; k < 3; k++)
@@ -195,7 +200,7 @@ int scene_check(const scene *s, char *err, size_t errlen)
             return -1;
         }
         for (k = 0; k < p->count; k++)
-            if (!finite3(SCENE_AT(s->poly_verts, vec3f, p->first + k)))
+            if (!finite3d(SCENE_AT(s->poly_verts, vec3d, p->first + k)))
                 return fail_item(err, errlen, name, "polygon", i, "has non-finite values");
         if (check_material_index(name, p->material, nm, "polygon", i, err, errlen) != 0)
             return -1;

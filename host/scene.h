@@ -13,6 +13,14 @@ typedef struct {
     float x, y, z;
 } vec3f;
 
+/* A position in world coordinates: kept in double precision from the readers through
+ * every transform, and converted to float only for the kernels, relative to a local
+ * origin near the camera (devscene.c), so that a scene far from 0 loses nothing. Colours,
+ * directions and normals stay vec3f. */
+typedef struct {
+    double x, y, z;
+} vec3d;
+
 enum scene_projection {
     SCENE_PERSPECTIVE = 0,
     SCENE_ORTHOGRAPHIC = 1,
@@ -20,8 +28,8 @@ enum scene_projection {
 };
 
 typedef struct {
+    vec3d eye; /* first: no padding, so that cameras compare with memcmp */
     enum scene_projection projection;
-    vec3f eye;
     vec3f u, v, w;       /* orthonormal viewing basis, w points backwards (away from the view) */
     float l, r, b, t;    /* image-plane window, in u and v units */
     float d;             /* perspective: distance from eye to image plane */
@@ -40,18 +48,18 @@ typedef struct {
 } scene_material;
 
 typedef struct {
-    vec3f position;
+    vec3d position;
     vec3f intensity; /* RGB */
 } scene_light;
 
 typedef struct {
-    vec3f center;
+    vec3d center;
     float radius; /* NFF allows a negative radius (inside visible); stored as given */
     int material;
 } scene_sphere;
 
 typedef struct {
-    vec3f p[3];
+    vec3d p[3];
     int normals; /* smooth: 1 + index of the first of its three vertex normals in
                   * scene.tri_normals (scene_triangle_normals); 0: flat */
     int material;
@@ -64,7 +72,7 @@ typedef struct {
 } scene_polygon;
 
 typedef struct {
-    vec3f base, apex;
+    vec3d base, apex;
     float base_radius, apex_radius;
     int material;
 } scene_cone;
@@ -89,7 +97,7 @@ typedef struct {
     scene_array triangles;   /* scene_triangle */
     scene_array tri_normals; /* vec3f: the vertex normals of smooth triangles, three each */
     scene_array polygons;    /* scene_polygon */
-    scene_array poly_verts;  /* vec3f */
+    scene_array poly_verts;  /* vec3d */
     scene_array cones;       /* scene_cone: open cones and cylinders */
 } scene;
 
@@ -108,7 +116,7 @@ long scene_push(scene_array *a, const void *elem, size_t elem_size);
 
 /* Appends a smooth triangle with vertex normals n[3] (or a flat one when n is NULL).
  * Returns its index or -1 when out of memory. */
-long scene_push_triangle(scene *s, const vec3f p[3], const vec3f *n, int material);
+long scene_push_triangle(scene *s, const vec3d p[3], const vec3f *n, int material);
 
 /* The three vertex normals of triangle t, or NULL when it is flat. */
 const vec3f *scene_triangle_normals(const scene *s, const scene_triangle *t);

@@ -46,8 +46,32 @@ int vec3f_normalize(vec3f a, vec3f *out)
     return 0;
 }
 
+vec3d vec3d_make(double x, double y, double z)
+{
+    vec3d v;
+    v.x = x;
+    v.y = y;
+    v.z = z;
+    return v;
+}
+
+vec3d vec3d_add_scaled(vec3d a, vec3f d, double s)
+{
+    return vec3d_make(a.x + s * d.x, a.y + s * d.y, a.z + s * d.z);
+}
+
+vec3d vec3d_sub(vec3d a, vec3d b)
+{
+    return vec3d_make(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+
+vec3f vec3d_diff(vec3d a, vec3d b)
+{
+    return vec3f_make((float)(a.x - b.x), (float)(a.y - b.y), (float)(a.z - b.z));
+}
+
 /* Adds the edge a -> b to Newell's sums. */
-static void newell_edge(double n[3], vec3f a, vec3f b)
+static void newell_edge(double n[3], vec3d a, vec3d b)
 {
     n[0] += ((double)a.y - b.y) * ((double)a.z + b.z);
     n[1] += ((double)a.z - b.z) * ((double)a.x + b.x);
@@ -59,27 +83,35 @@ static double length3(const double n[3])
     return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
-void scene_newell(const vec3f *v, int n, double out[3])
+static vec3d relative(vec3d v, const vec3d *origin)
+{
+    return origin ? vec3d_sub(v, *origin) : v;
+}
+
+void scene_newell(const vec3d *v, int n, const vec3d *origin, double out[3])
 {
     int i;
     out[0] = out[1] = out[2] = 0.0;
     for (i = 0; i < n; i++)
-        newell_edge(out, v[i], v[(i + 1) % n]);
+        newell_edge(out, relative(v[i], origin), relative(v[(i + 1) % n], origin));
 }
 
-int scene_polygon_plane(const vec3f *v, int n, double normal[3], double *offset, int *axis)
+int scene_polygon_plane(const vec3d *v, int n, const vec3d *origin, double normal[3],
+                        double *offset, int *axis)
 {
     double len;
     int i;
-    scene_newell(v, n, normal);
+    scene_newell(v, n, origin, normal);
     len = length3(normal);
     if (!(len > 0.0) || !isfinite(len))
         return -1;
     for (i = 0; i < 3; i++)
         normal[i] /= len;
     *offset = 0.0;
-    for (i = 0; i < n; i++)
-        *offset += normal[0] * v[i].x + normal[1] * v[i].y + normal[2] * v[i].z;
+    for (i = 0; i < n; i++) {
+        vec3d p = relative(v[i], origin);
+        *offset += normal[0] * p.x + normal[1] * p.y + normal[2] * p.z;
+    }
     *offset /= n;
     *axis = fabs(normal[0]) > fabs(normal[1]) ? (fabs(normal[0]) > fabs(normal[2]) ? 0 : 2)
                                               : (fabs(normal[1]) > fabs(normal[2]) ? 1 : 2);
@@ -92,11 +124,11 @@ void scene_area_init(scene_area *a)
     for (k = 0; k < 3; k++) /* field by field: a memset costs more, once per polygon */
         a->normal[k] = a->lo[k] = a->hi[k] = 0.0;
     a->len = 0.0;
-    a->first = a->prev = vec3f_make(0, 0, 0);
+    a->first = a->prev = vec3d_make(0, 0, 0);
     a->count = 0;
 }
 
-void scene_area_add(scene_area *a, vec3f v)
+void scene_area_add(scene_area *a, vec3d v)
 {
     double c[3];
     int k;
@@ -140,7 +172,7 @@ int scene_area_zero(scene_area *a)
     return !(a->len > SCENE_ZERO_AREA * size2) || !isfinite(a->len);
 }
 
-int scene_polygon_zero_area(const vec3f *v, int n)
+int scene_polygon_zero_area(const vec3d *v, int n)
 {
     scene_area a;
     int i;
@@ -150,10 +182,10 @@ int scene_polygon_zero_area(const vec3f *v, int n)
     return scene_area_zero(&a);
 }
 
-int scene_triangle_degenerate(const scene_triangle *t)
+int scene_triangle_degenerate(const vec3f p[3])
 {
-    float e1x = t->p[1].x - t->p[0].x, e1y = t->p[1].y - t->p[0].y, e1z = t->p[1].z - t->p[0].z;
-    float e2x = t->p[2].x - t->p[0].x, e2y = t->p[2].y - t->p[0].y, e2z = t->p[2].z - t->p[0].z;
+    float e1x = p[1].x - p[0].x, e1y = p[1].y - p[0].y, e1z = p[1].z - p[0].z;
+    float e2x = p[2].x - p[0].x, e2y = p[2].y - p[0].y, e2z = p[2].z - p[0].z;
     float cx = e1y * e2z - e1z * e2y, cy = e1z * e2x - e1x * e2z, cz = e1x * e2y - e1y * e2x;
     return cx == 0.0f && cy == 0.0f && cz == 0.0f;
 }

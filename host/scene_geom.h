@@ -14,13 +14,23 @@ float vec3f_length(vec3f a);
 /* Returns 0 and the unit vector, or -1 when a is zero or not finite. */
 int vec3f_normalize(vec3f a, vec3f *out);
 
-/* Newell's normal of a polygon, not normalised: its length is twice the area. */
-void scene_newell(const vec3f *v, int n, double out[3]);
+/* Positions (double precision): a + s * d, a - b, and the float vector a - b (the
+ * direction between two positions, or a position relative to a local origin). */
+vec3d vec3d_make(double x, double y, double z);
+vec3d vec3d_add_scaled(vec3d a, vec3f d, double s);
+vec3d vec3d_sub(vec3d a, vec3d b);
+vec3f vec3d_diff(vec3d a, vec3d b);
+
+/* Newell's normal of a polygon, not normalised: its length is twice the area. The
+ * vertices are taken relative to origin (NULL: the world's). */
+void scene_newell(const vec3d *v, int n, const vec3d *origin, double out[3]);
 
 /* The plane the renderer uses for a polygon: the unit Newell normal, the mean offset
  * n.x = offset of the vertices, and the dominant axis of the normal (dropped for the 2-D
- * inside test). Returns 0, or -1 when the normal is zero or not finite. */
-int scene_polygon_plane(const vec3f *v, int n, double normal[3], double *offset, int *axis);
+ * inside test), in coordinates relative to origin (NULL: world coordinates). Returns 0, or
+ * -1 when the normal is zero or not finite. */
+int scene_polygon_plane(const vec3d *v, int n, const vec3d *origin, double normal[3],
+                        double *offset, int *axis);
 
 /* The zero-area rule for polygons (both readers reject such a polygon): a polygon has no
  * area when the length of its Newell normal (twice its area) is not above 1e-12 times the
@@ -32,24 +42,25 @@ typedef struct {
     double normal[3];    /* Newell's normal of the vertices so far */
     double len;          /* |normal|, set by scene_area_zero */
     double lo[3], hi[3]; /* bounding box of the vertices */
-    vec3f first, prev;
+    vec3d first, prev;
     long count; /* vertices added */
 } scene_area;
 
 void scene_area_init(scene_area *a);
-void scene_area_add(scene_area *a, vec3f v);
+void scene_area_add(scene_area *a, vec3d v);
 /* Closes the polygon (the edge from the last vertex to the first) and applies the rule:
  * 1 when it has no area, else 0. Call it once, after the last vertex. */
 int scene_area_zero(scene_area *a);
 /* The diagonal of the bounding box. */
 double scene_area_size(const scene_area *a);
 /* The rule for the n vertices at v. */
-int scene_polygon_zero_area(const vec3f *v, int n);
+int scene_polygon_zero_area(const vec3d *v, int n);
 
-/* 1 when the triangle has no area in float arithmetic: the cross product of its edges, as
- * the kernels compute it, is exactly zero (coincident or collinear vertices). Such a
- * triangle has no normal and is left out of rendering. */
-int scene_triangle_degenerate(const scene_triangle *t);
+/* 1 when the triangle with the float vertices p (as the kernels get them) has no area in
+ * float arithmetic: the cross product of its edges, as the kernels compute it, is exactly
+ * zero (coincident or collinear vertices). Such a triangle has no normal and is left out
+ * of rendering. */
+int scene_triangle_degenerate(const vec3f p[3]);
 
 /* Builds u, v, w from a view direction (eye towards look-at) and an up vector, as in
  * Shirley & Marschner: w = -view/|view|, u = up x w / |up x w|, v = w x u.

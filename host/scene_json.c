@@ -77,7 +77,8 @@ static int read_camera(const jreader *r, const cJSON *cam)
                                        "window",     "fov", "distance", "direction", NULL};
     scene_camera *c = &r->s->camera;
     const cJSON *m, *look, *viewn, *up, *win, *fov, *dist, *dirn;
-    vec3f eye, upv, view;
+    vec3d eye;
+    vec3f upv, view;
     double d = 1.0;
     char buf[SCENE_SHOWN_LEN];
 
@@ -102,7 +103,7 @@ static int read_camera(const jreader *r, const cJSON *cam)
                            jv_type_name(m));
     }
     if (!(m = jv_need(&r->doc, cam, "camera", "eye")) ||
-        jv_vec3(&r->doc, m, "camera.eye", &eye) != 0)
+        jv_point(&r->doc, m, "camera.eye", &eye) != 0)
         return -1;
     look = jv_member(cam, "look_at");
     viewn = jv_member(cam, "view");
@@ -112,10 +113,10 @@ static int read_camera(const jreader *r, const cJSON *cam)
         return jv_fail(&r->doc, cam,
                        "camera: missing \"look_at\" (a point) or \"view\" (a direction)");
     if (look) {
-        vec3f at;
-        if (jv_vec3(&r->doc, look, "camera.look_at", &at) != 0)
+        vec3d at;
+        if (jv_point(&r->doc, look, "camera.look_at", &at) != 0)
             return -1;
-        view = vec3f_sub(at, eye);
+        view = vec3d_diff(at, eye);
         if (view.x == 0 && view.y == 0 && view.z == 0)
             return jv_fail(&r->doc, look,
                            "camera.look_at: equals the eye, so there is no view direction");
@@ -289,7 +290,7 @@ static int read_lights(const jreader *r, const cJSON *lights)
             return -1;
         snprintf(sub, sizeof sub, "%s.position", path);
         if (!(m = jv_need(&r->doc, l, path, "position")) ||
-            jv_vec3(&r->doc, m, sub, &light.position) != 0)
+            jv_point(&r->doc, m, sub, &light.position) != 0)
             return -1;
         snprintf(sub, sizeof sub, "%s.intensity", path);
         if (!(m = jv_need(&r->doc, l, path, "intensity")) ||
@@ -303,7 +304,7 @@ static int read_lights(const jreader *r, const cJSON *lights)
 
 /* 0 when the polygon has an area (see scene_area_zero); otherwise fails at `node`. Also
  * gives the unit normal and the size of the polygon. */
-static int check_area(const jreader *r, const cJSON *node, const char *path, const vec3f *p, int n,
+static int check_area(const jreader *r, const cJSON *node, const char *path, const vec3d *p, int n,
                       double unit[3], double *size_out)
 {
     scene_area a;
@@ -376,7 +377,8 @@ static int read_object(const jreader *r, const cJSON *o, int i)
         scene_sphere sp;
         double rad;
         snprintf(sub, sizeof sub, "%s.center", path);
-        if (!(m = jv_need(&r->doc, o, path, "center")) || jv_vec3(&r->doc, m, sub, &sp.center) != 0)
+        if (!(m = jv_need(&r->doc, o, path, "center")) ||
+            jv_point(&r->doc, m, sub, &sp.center) != 0)
             return -1;
         snprintf(sub, sizeof sub, "%s.radius", path);
         if (!(m = jv_need(&r->doc, o, path, "radius")) || jv_number(&r->doc, m, sub, &rad) != 0)
@@ -392,7 +394,7 @@ static int read_object(const jreader *r, const cJSON *o, int i)
     }
 
     {
-        vec3f *pts;
+        vec3d *pts;
         int n, k;
         double unit[3] = {0, 0, 0}, size = 0;
         const cJSON *verts = jv_need(&r->doc, o, path, "vertices");
@@ -435,18 +437,20 @@ static int read_object(const jreader *r, const cJSON *o, int i)
             return -1;
         }
         if (tri) {
-            vec3f p[3], nv[3], *normals = NULL;
+            vec3d p[3];
+            vec3f nv[3], *normals = NULL;
             memcpy(p, pts, sizeof p);
             free(pts);
             if ((m = jv_member(o, "normals"))) {
-                vec3f *nrm;
+                vec3d *nrm;
                 int nn;
                 const cJSON *e;
                 snprintf(sub, sizeof sub, "%s.normals", path);
                 if (jv_points(&r->doc, m, sub, 3, 3, &nrm, &nn) != 0)
                     return -1;
                 for (k = 0, e = m->child; k < 3; k++, e = e->next) {
-                    if (vec3f_normalize(nrm[k], &nv[k]) != 0) {
+                    vec3f nf = vec3f_make((float)nrm[k].x, (float)nrm[k].y, (float)nrm[k].z);
+                    if (vec3f_normalize(nf, &nv[k]) != 0) {
                         free(nrm);
                         return jv_fail(&r->doc, e, "%s[%d]: the normal is zero", sub, k);
                     }

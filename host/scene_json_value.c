@@ -293,6 +293,17 @@ int jv_vec3(const jv_doc *doc, const cJSON *node, const char *path, vec3f *out)
     return 0;
 }
 
+int jv_point(const jv_doc *doc, const cJSON *node, const char *path, vec3d *out)
+{
+    double d[3];
+    if (jv_numbers(doc, node, path, 3, "[x, y, z]", d) != 0)
+        return -1;
+    out->x = d[0];
+    out->y = d[1];
+    out->z = d[2];
+    return 0;
+}
+
 /* A colour: [r, g, b] or one number (grey). */
 int jv_colour(const jv_doc *doc, const cJSON *node, const char *path, vec3f *out)
 {
@@ -327,7 +338,7 @@ const cJSON *jv_need(const jv_doc *doc, const cJSON *obj, const char *path, cons
 }
 
 /* Reads an array of at least lo, at most hi points into pts (malloc'd). */
-int jv_points(const jv_doc *doc, const cJSON *node, const char *path, int lo, int hi, vec3f **pts,
+int jv_points(const jv_doc *doc, const cJSON *node, const char *path, int lo, int hi, vec3d **pts,
               int *count)
 {
     const cJSON *c;
@@ -348,7 +359,7 @@ int jv_points(const jv_doc *doc, const cJSON *node, const char *path, int lo, in
     for (c = node->child; c; c = c->next, i++) {
         char sub[160];
         snprintf(sub, sizeof sub, "%s[%d]", path, i);
-        if (jv_vec3(doc, c, sub, &(*pts)[i]) != 0) {
+        if (jv_point(doc, c, sub, &(*pts)[i]) != 0) {
             free(*pts);
             *pts = NULL;
             return -1;

@@ -44,12 +44,14 @@ int jv_int(const jv_doc *doc, const cJSON *node, const char *path, int lo, int h
 /* An array of exactly n numbers; `form` shows the expected shape, e.g. "[x, y, z]". */
 int jv_numbers(const jv_doc *doc, const cJSON *node, const char *path, int n, const char *form,
                double *out);
-/* A point or direction [x, y, z]. */
+/* A direction [x, y, z] (float). */
 int jv_vec3(const jv_doc *doc, const cJSON *node, const char *path, vec3f *out);
+/* A position [x, y, z] (double: scene.h, vec3d). */
+int jv_point(const jv_doc *doc, const cJSON *node, const char *path, vec3d *out);
 /* A colour: [r, g, b] or one number (grey). */
 int jv_colour(const jv_doc *doc, const cJSON *node, const char *path, vec3f *out);
 /* An array of at least lo, at most hi points, into *pts (malloc'd; NULL on failure). */
-int jv_points(const jv_doc *doc, const cJSON *node, const char *path, int lo, int hi, vec3f **pts,
+int jv_points(const jv_doc *doc, const cJSON *node, const char *path, int lo, int hi, vec3d **pts,
               int *count);
 
 #endif

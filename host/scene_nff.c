@@ -177,6 +177,12 @@ static vec3f v3(const double *d)
     return vec3f_make((float)d[0], (float)d[1], (float)d[2]);
 }
 
+/* A position: kept in double (scene.h, vec3d). */
+static vec3d p3(const double *d)
+{
+    return vec3d_make(d[0], d[1], d[2]);
+}
+
 static void begin(nff_reader *r, const char *ent, long n)
 {
     r->ent = ent;
@@ -220,7 +226,8 @@ static int parse_view(nff_reader *r)
     char note[64];
     int k, eof = 0;
     scene_camera *c = &r->s->camera;
-    vec3f from, at, up;
+    vec3d from, at;
+    vec3f up;
 
     if (r->lx.ntok != 1)
         return fail(r, r->lx.line,
@@ -269,12 +276,12 @@ static int parse_view(nff_reader *r)
                     scene_single_note(val[3][0], note, sizeof note));
     if ((long long)w * h > CW_MAX_PIXELS)
         return fail(r, seen[5], "'resolution' %ldx%ld has more than 2^28 pixels", w, h);
-    from = v3(val[0]);
-    at = v3(val[1]);
+    from = p3(val[0]);
+    at = p3(val[1]);
     up = v3(val[2]);
     if (from.x == at.x && from.y == at.y && from.z == at.z)
         return fail(r, seen[1], "'at' equals 'from': no view direction");
-    if (scene_camera_basis(c, vec3f_sub(at, from), up) != 0)
+    if (scene_camera_basis(c, vec3d_diff(at, from), up) != 0)
         return fail(r, seen[2], "'up' is zero or parallel to the view direction (at - from)");
     c->projection = SCENE_PERSPECTIVE;
     c->eye = from;
@@ -298,7 +305,8 @@ static int parse_polygon(nff_reader *r, int patch)
     long n, i;
     int mat;
     double d[6];
-    vec3f p[3], nrm[3];
+    vec3d p[3];
+    vec3f nrm[3];
     scene_array *verts = &r->s->poly_verts;
     size_t first = verts->count;
     scene_area area; /* the vertices are not kept together: added one by one */
@@ -320,7 +328,8 @@ static int parse_polygon(nff_reader *r, int patch)
     begin(r, kw, n);
     scene_area_init(&area);
     for (i = 0; i < n; i++) {
-        vec3f q, qn = vec3f_make(0, 0, 0);
+        vec3d q;
+        vec3f qn = vec3f_make(0, 0, 0);
         if (!next_content(r))
             return fail(
                 r, r->lx.line,
@@ -329,7 +338,7 @@ static int parse_polygon(nff_reader *r, int patch)
         r->vertex = i + 1;
         if (numbers(r, 0, patch ? 6 : 3, d, patch ? "x y z nx ny nz" : "x y z") != 0)
             return -1;
-        q = v3(d);
+        q = p3(d);
         scene_area_add(&area, q);
         if (patch && vec3f_normalize(v3(d + 3), &qn) != 0)
             return fail(r, r->lx.line, "zero normal for vertex %ld of 'pp %ld' (line %ld)", i + 1,
@@ -398,9 +407,9 @@ static int parse_cone(nff_reader *r)
     }
     if ((mat = current_material(r)) < 0)
         return -1;
-    cone.base = v3(d);
+    cone.base = p3(d);
     cone.base_radius = (float)d[3];
-    cone.apex = v3(d + 4);
+    cone.apex = p3(d + 4);
     cone.apex_radius = (float)d[7];
     cone.material = mat;
     if (cone.base.x == cone.apex.x && cone.base.y == cone.apex.y && cone.base.z == cone.apex.z)
@@ -436,7 +445,7 @@ static int parse_entity(nff_reader *r, long *v_line)
         if (n != 3 && n != 6)
             return fail(r, r->lx.line,
                         "expected 3 numbers after 'l' (x y z) or 6 (x y z r g b), found %d", n);
-        l.position = v3(d);
+        l.position = p3(d);
         /* NaN marks "no colour" until the number of lights is known (input is never NaN) */
         l.intensity = n == 6 ? v3(d + 3) : vec3f_make(NAN, NAN, NAN);
         return push(r, &r->s->lights, &l, sizeof l);
@@ -474,7 +483,7 @@ static int parse_entity(nff_reader *r, long *v_line)
                         scene_single_note(d[3], r->shown, sizeof r->shown));
         if ((mat = current_material(r)) < 0)
             return -1;
-        sp.center = v3(d);
+        sp.center = p3(d);
         sp.radius = (float)d[3];
         sp.material = mat;
         return push(r, &r->s->spheres, &sp, sizeof sp);

@@ -67,6 +67,12 @@ static void put3(FILE *f, vec3f a)
     fprintf(f, "<%.9g, %.9g, %.9g>", (double)a.x, (double)a.y, (double)a.z);
 }
 
+/* positions (double) with 17, which round-trips them exactly */
+static void putp3(FILE *f, vec3d a)
+{
+    fprintf(f, "<%.17g, %.17g, %.17g>", a.x, a.y, a.z);
+}
+
 static void putd3(FILE *f, const double *a)
 {
     fprintf(f, "<%.17g, %.17g, %.17g>", a[0], a[1], a[2]);
@@ -185,7 +191,7 @@ static void write_layered(FILE *f, const scene_material *m)
 }
 
 /* v moved along the dominant axis onto the plane nn.x = off */
-static void onto_plane(vec3f v, const double nn[3], double off, int axis, double out[3])
+static void onto_plane(vec3d v, const double nn[3], double off, int axis, double out[3])
 {
     double rest = 0.0;
     int k;
@@ -288,9 +294,9 @@ static void write_cones(FILE *f, const scene *s)
     for (i = 0; i < s->cones.count; i++) {
         const scene_cone *c = &SCENE_AT(s->cones, scene_cone, i);
         fprintf(f, "cone { ");
-        put3(f, c->base);
+        putp3(f, c->base);
         fprintf(f, ", %.9g, ", fabs((double)c->base_radius));
-        put3(f, c->apex);
+        putp3(f, c->apex);
         fprintf(f, ", %.9g open", fabs((double)c->apex_radius));
         write_material_ref(f, s, c->material);
         fprintf(f, " }\n");
@@ -323,7 +329,7 @@ static void write_triangles(FILE *f, const scene *s, size_t *skipped)
             for (k = 0; k < 3; k++) {
                 if (k > 0)
                     fprintf(f, ", ");
-                put3(f, t->p[k]);
+                putp3(f, t->p[k]);
                 if (nrm) {
                     fprintf(f, ", ");
                     put3(f, nrm[k]);
@@ -346,10 +352,10 @@ static void write_polygons(FILE *f, const scene *s, size_t *skipped)
     *skipped = 0;
     for (i = 0; i < s->polygons.count; i++) {
         const scene_polygon *p = &SCENE_AT(s->polygons, scene_polygon, i);
-        const vec3f *v = &SCENE_AT(s->poly_verts, vec3f, p->first);
+        const vec3d *v = &SCENE_AT(s->poly_verts, vec3d, p->first);
         double nn[3], off, q[3];
         int axis, k;
-        if (scene_polygon_plane(v, p->count, nn, &off, &axis) != 0) {
+        if (scene_polygon_plane(v, p->count, NULL, nn, &off, &axis) != 0) {
             (*skipped)++; /* no area: the renderer leaves it out as well */
             continue;
         }
@@ -393,7 +399,7 @@ int pov_write_scene(const scene *s, FILE *f, char *err, size_t errlen)
     for (i = 0; i < s->lights.count; i++) {
         const scene_light *l = &SCENE_AT(s->lights, scene_light, i);
         fprintf(f, "light_source { ");
-        put3(f, l->position);
+        putp3(f, l->position);
         fprintf(f, ", color rgb ");
         put3(f, l->intensity);
         fprintf(f, " }\n");
@@ -428,7 +434,7 @@ int pov_write_scene(const scene *s, FILE *f, char *err, size_t errlen)
     for (i = 0; i < s->spheres.count; i++) {
         const scene_sphere *sp = &SCENE_AT(s->spheres, scene_sphere, i);
         fprintf(f, "sphere { ");
-        put3(f, sp->center);
+        putp3(f, sp->center);
         fprintf(f, ", %.9g", fabs((double)sp->radius));
         write_material_ref(f, s, sp->material);
         fprintf(f, " }\n");

@@ -45,27 +45,27 @@ static vec3f dir_world(const scene_camera *c, vec3f dc)
 }
 
 /* Grows the box [lo, hi] by the point p, inflated by r. */
-static void grow(vec3f *lo, vec3f *hi, vec3f p, float r, int *any)
+static void grow(vec3d *lo, vec3d *hi, vec3d p, float r, int *any)
 {
-    vec3f a = vec3f_make(p.x - r, p.y - r, p.z - r), b = vec3f_make(p.x + r, p.y + r, p.z + r);
+    vec3d a = vec3d_make(p.x - r, p.y - r, p.z - r), b = vec3d_make(p.x + r, p.y + r, p.z + r);
     if (!*any) {
         *lo = a;
         *hi = b;
         *any = 1;
         return;
     }
-    lo->x = fminf(lo->x, a.x);
-    lo->y = fminf(lo->y, a.y);
-    lo->z = fminf(lo->z, a.z);
-    hi->x = fmaxf(hi->x, b.x);
-    hi->y = fmaxf(hi->y, b.y);
-    hi->z = fmaxf(hi->z, b.z);
+    lo->x = fmin(lo->x, a.x);
+    lo->y = fmin(lo->y, a.y);
+    lo->z = fmin(lo->z, a.z);
+    hi->x = fmax(hi->x, b.x);
+    hi->y = fmax(hi->y, b.y);
+    hi->z = fmax(hi->z, b.z);
 }
 
 /* The centre and diagonal of the scene's bounding box; returns 0 for an empty scene. */
-static int scene_bounds(const scene *s, vec3f *centre, float *diag)
+static int scene_bounds(const scene *s, vec3d *centre, float *diag)
 {
-    vec3f lo = {0, 0, 0}, hi = {0, 0, 0};
+    vec3d lo = {0, 0, 0}, hi = {0, 0, 0};
     int any = 0, k;
     size_t i;
     for (i = 0; i < s->spheres.count; i++) {
@@ -76,7 +76,7 @@ static int scene_bounds(const scene *s, vec3f *centre, float *diag)
         for (k = 0; k < 3; k++)
             grow(&lo, &hi, SCENE_AT(s->triangles, scene_triangle, i).p[k], 0.0f, &any);
     for (i = 0; i < s->poly_verts.count; i++)
-        grow(&lo, &hi, SCENE_AT(s->poly_verts, vec3f, i), 0.0f, &any);
+        grow(&lo, &hi, SCENE_AT(s->poly_verts, vec3d, i), 0.0f, &any);
     for (i = 0; i < s->cones.count; i++) {
         const scene_cone *cn = &SCENE_AT(s->cones, scene_cone, i);
         grow(&lo, &hi, cn->base, fabsf(cn->base_radius), &any);
@@ -84,8 +84,8 @@ static int scene_bounds(const scene *s, vec3f *centre, float *diag)
     }
     if (!any)
         return 0;
-    *centre = scale(add(lo, hi), 0.5f);
-    *diag = vec3f_length(vec3f_sub(hi, lo));
+    *centre = vec3d_make(0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z));
+    *diag = vec3f_length(vec3d_diff(hi, lo));
     return 1;
 }
 
@@ -110,10 +110,11 @@ static vec3f world_up(const scene_camera *c)
 void viewcam_init(viewcam *vc, const scene *s)
 {
     const scene_camera *c = &s->camera;
-    vec3f centre, view = scale(c->w, -1.0f);
+    vec3d centre;
+    vec3f view = scale(c->w, -1.0f);
     float diag = 0.0f, dist = 1.0f;
     if (scene_bounds(s, &centre, &diag)) {
-        float along = vec3f_dot(vec3f_sub(centre, c->eye), view);
+        float along = vec3f_dot(vec3d_diff(centre, c->eye), view);
         float least = diag > 0.0f ? 1e-3f * diag : 1e-3f;
         dist = isfinite(along) && along > least ? along : (diag > 0.0f ? 0.5f * diag : 1.0f);
     }
@@ -123,7 +124,7 @@ void viewcam_init(viewcam *vc, const scene *s)
     vc->width = s->width;
     vc->height = s->height;
     vc->dist = dist;
-    vc->pivot = add(c->eye, scale(view, dist));
+    vc->pivot = vec3d_add_scaled(c->eye, view, dist);
     vc->up = world_up(c);
     if (c->projection == SCENE_OBLIQUE)
         vc->dir_cam =
@@ -163,7 +164,7 @@ static void look_from(viewcam *vc, vec3f w_new)
         return;
     if (scene_camera_basis(&c, scale(w_new, -1.0f), vc->up) != 0)
         return; /* straight along up: keep the old camera */
-    c.eye = add(vc->pivot, scale(c.w, vc->dist));
+    c.eye = vec3d_add_scaled(vc->pivot, c.w, vc->dist);
     c.dir = dir_world(&c, vc->dir_cam);
     vc->cam = c;
 }
@@ -191,8 +192,8 @@ float viewcam_pixel_size(const viewcam *vc)
 
 static void move(viewcam *vc, vec3f delta)
 {
-    vc->cam.eye = add(vc->cam.eye, delta);
-    vc->pivot = add(vc->pivot, delta);
+    vc->cam.eye = vec3d_add_scaled(vc->cam.eye, delta, 1.0);
+    vc->pivot = vec3d_add_scaled(vc->pivot, delta, 1.0);
 }
 
 void viewcam_pan(viewcam *vc, float dx, float dy)
@@ -218,7 +219,7 @@ void viewcam_zoom(viewcam *vc, float steps)
         double d = vc->dist * k, hi = 1e4 * vc->home_dist;
         d = clampd(d, vc->min_dist, hi > vc->dist ? hi : vc->dist);
         vc->dist = (float)d;
-        vc->cam.eye = add(vc->pivot, scale(vc->cam.w, vc->dist));
+        vc->cam.eye = vec3d_add_scaled(vc->pivot, vc->cam.w, vc->dist);
     } else {
         double h = (double)vc->cam.t - vc->cam.b;
         /* keep the window within sane bounds of the pivot's distance */
@@ -318,7 +319,7 @@ int viewcam_to_json(const viewcam *vc, int max_depth, char *buf, size_t n)
     k = snprintf(buf, n,
                  "{\n  \"image\": {\"width\": %d, \"height\": %d},\n  \"max_depth\": %d,\n"
                  "  \"camera\": {\n    \"projection\": \"%s\",\n"
-                 "    \"eye\": [%.9g, %.9g, %.9g],\n    \"view\": [%.9g, %.9g, %.9g],\n"
+                 "    \"eye\": [%.17g, %.17g, %.17g],\n    \"view\": [%.9g, %.9g, %.9g],\n"
                  "    \"up\": [%.9g, %.9g, %.9g],\n    \"window\": [%.9g, %.9g, %.9g, %.9g]",
                  vc->width, vc->height, max_depth, viewcam_projection_name(c->projection), c->eye.x,
                  c->eye.y, c->eye.z, -c->w.x, -c->w.y, -c->w.z, c->v.x, c->v.y, c->v.z, c->l, c->r,

@@ -11,7 +11,7 @@
 typedef struct {
     scene_camera cam; /* the current camera; its window fits width x height */
     int width, height;
-    vec3f pivot;   /* the orbit centre (look-at point), at distance `dist` along -w */
+    vec3d pivot;   /* the orbit centre (look-at point), at distance `dist` along -w */
     float dist;    /* eye to pivot */
     vec3f up;      /* world up: the orbit axis, always perpendicular to cam.u */
     vec3f dir_cam; /* the oblique ray direction in camera coordinates (u, v, w) */
@@ -21,7 +21,7 @@ typedef struct {
     /* the scene's camera, for reset */
     scene_camera home;
     int home_width, home_height;
-    vec3f home_pivot;
+    vec3d home_pivot;
     float home_dist;
     vec3f home_up;
     vec3f home_dir_cam;

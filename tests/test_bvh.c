@@ -1140,7 +1140,7 @@ static void test_triangle_blocks(void **state)
     rmdir(dir);
     assert_int_equal(scene_finish(&s, 0, 0, 0, err, sizeof err), 0);
     memset(&ds, 0, sizeof ds);
-    assert_int_equal(devscene_convert(&s, &ds, err, sizeof err), 0);
+    assert_int_equal(devscene_convert(&s, NULL, &ds, err, sizeof err), 0);
     assert_int_equal(devscene_build_bvh(&ds, err, sizeof err), 0);
     nprims = ds.nsph + ds.ntri + ds.npg;
     assert_int_equal(nprims, 3000 + 1200);

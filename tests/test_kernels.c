@@ -12,7 +12,7 @@
 #include "render_debug.h"
 #include "scene.h"
 
-TU_RENDERER_FIXTURE(1)
+TU_RENDERER_FIXTURE_AT(1, 1) /* rays in world coordinates */
 static char err[2048];
 
 /* A camera at eye with basis x, y, z (w = +z), window [-1,1]^2, d = 1. */
@@ -104,7 +104,7 @@ static void test_camera_perspective_basis(void **state)
     /* looking from (1,2,3) along +x with up +z: w = -x, u = up x w = (0,-1,0), v = w x u =
      * (0,0,1). 1x1 image, window [-1,1]^2: the single ray goes straight ahead. */
     base_scene(&s, SCENE_PERSPECTIVE, 1, 1);
-    s.camera.eye = vec3f_make(1, 2, 3);
+    s.camera.eye = vec3d_make(1, 2, 3);
     assert_int_equal(scene_camera_basis(&s.camera, vec3f_make(1, 0, 0), vec3f_make(0, 0, 1)), 0);
     rays = gen_rays(&s);
     assert_vec(rays[0].origin, 1, 2, 3, 0, "origin");
@@ -112,7 +112,7 @@ static void test_camera_perspective_basis(void **state)
     free(rays);
     /* 2x1 image: left pixel at u = -0.5, i.e. 0.5 along -u = +y */
     base_scene(&s, SCENE_PERSPECTIVE, 2, 1);
-    s.camera.eye = vec3f_make(1, 2, 3);
+    s.camera.eye = vec3d_make(1, 2, 3);
     assert_int_equal(scene_camera_basis(&s.camera, vec3f_make(1, 0, 0), vec3f_make(0, 0, 1)), 0);
     rays = gen_rays(&s);
     assert_vec(rays[0].dir, 1 / sqrt(1.25), 0.5 / sqrt(1.25), 0, 1e-6, "dir left");
@@ -513,7 +513,7 @@ static void test_shade_miss_is_background(void **state)
     add_material(&s, vec3f_make(1, 1, 1), vec3f_make(1, 1, 1), vec3f_make(0, 0, 0),
                  vec3f_make(0, 0, 0), 1);
     tu_add_sphere(&s, 0, 0, -5, 1, 0);
-    s.camera.eye = vec3f_make(0, 10, 10); /* looking along -z past the sphere */
+    s.camera.eye = vec3d_make(0, 10, 10); /* looking along -z past the sphere */
     render_pixel(&s, 0, 0, got);
     check_pixel(got, want, "miss");
     scene_free(&s);

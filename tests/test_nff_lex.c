@@ -228,6 +228,36 @@ static int same_array(const scene_array *a, const scene_array *b, size_t size)
            (a->count == 0 || memcmp(a->data, b->data, a->count * size) == 0);
 }
 
+/* Lights and cones field by field: their structs end in padding. */
+static int same_pos(vec3d a, vec3d b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
+}
+
+static int same_lights_cones(const scene *a, const scene *b)
+{
+    size_t i;
+    if (a->lights.count != b->lights.count || a->cones.count != b->cones.count)
+        return 0;
+    for (i = 0; i < a->lights.count; i++) {
+        const scene_light *p = &SCENE_AT(a->lights, scene_light, i);
+        const scene_light *q = &SCENE_AT(b->lights, scene_light, i);
+        if (!same_pos(p->position, q->position) ||
+            memcmp(&p->intensity, &q->intensity, sizeof p->intensity) != 0)
+            return 0;
+    }
+    for (i = 0; i < a->cones.count; i++) {
+        const scene_cone *p = &SCENE_AT(a->cones, scene_cone, i);
+        const scene_cone *q = &SCENE_AT(b->cones, scene_cone, i);
+        if (!same_pos(p->base, q->base) || !same_pos(p->apex, q->apex) ||
+            memcmp(&p->base_radius, &q->base_radius, sizeof(float)) != 0 ||
+            memcmp(&p->apex_radius, &q->apex_radius, sizeof(float)) != 0 ||
+            p->material != q->material)
+            return 0;
+    }
+    return 1;
+}
+
 static int same_scene(const scene *a, const scene *b)
 {
     return strcmp(a->name, b->name) == 0 && memcmp(&a->camera, &b->camera, sizeof a->camera) == 0 &&
@@ -235,13 +265,11 @@ static int same_scene(const scene *a, const scene *b)
            memcmp(&a->background, &b->background, sizeof(vec3f)) == 0 &&
            memcmp(&a->ambient, &b->ambient, sizeof(vec3f)) == 0 &&
            same_array(&a->materials, &b->materials, sizeof(scene_material)) &&
-           same_array(&a->lights, &b->lights, sizeof(scene_light)) &&
-           same_array(&a->spheres, &b->spheres, sizeof(scene_sphere)) &&
+           same_lights_cones(a, b) && same_array(&a->spheres, &b->spheres, sizeof(scene_sphere)) &&
            same_array(&a->triangles, &b->triangles, sizeof(scene_triangle)) &&
            same_array(&a->tri_normals, &b->tri_normals, sizeof(vec3f)) &&
            same_array(&a->polygons, &b->polygons, sizeof(scene_polygon)) &&
-           same_array(&a->poly_verts, &b->poly_verts, sizeof(vec3f)) &&
-           same_array(&a->cones, &b->cones, sizeof(scene_cone));
+           same_array(&a->poly_verts, &b->poly_verts, sizeof(vec3d));
 }
 
 /* The file at path parsed whole (nff_parse of its text, named by the path) and read in

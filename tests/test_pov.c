@@ -335,7 +335,7 @@ static void one_sphere_scene(scene *s, scene_material m)
     scene_light l;
     char err[256];
     scene_init(s);
-    s->camera.eye = vec3f_make(0, 0, 5);
+    s->camera.eye = vec3d_make(0, 0, 5);
     assert_int_equal(scene_camera_basis(&s->camera, vec3f_make(0, 0, -1), vec3f_make(0, 1, 0)), 0);
     s->camera.l = -1;
     s->camera.r = 1;
@@ -343,11 +343,11 @@ static void one_sphere_scene(scene *s, scene_material m)
     s->camera.t = 0.75f;
     s->camera.d = 2;
     assert_true(scene_push(&s->materials, &m, sizeof m) == 0);
-    sp.center = vec3f_make(0, 0, 0);
+    sp.center = vec3d_make(0, 0, 0);
     sp.radius = -1.5f;
     sp.material = 0;
     assert_true(scene_push(&s->spheres, &sp, sizeof sp) == 0);
-    l.position = vec3f_make(3, 4, 5);
+    l.position = vec3d_make(3, 4, 5);
     l.intensity = vec3f_make(0.5f, 0.6f, 0.7f);
     assert_true(scene_push(&s->lights, &l, sizeof l) == 0);
     assert_int_equal(scene_finish(s, 32, 24, 3, err, sizeof err), 0);
@@ -476,16 +476,16 @@ static void test_write_polygon_on_plane(void **state)
     /* a quad slightly off its plane comes out exactly on the renderer's plane */
     scene s;
     scene_polygon pg;
-    vec3f v[4];
+    vec3d v[4];
     char err[256], *out, *p;
     int rc, k;
     double pts[5][3];
     (void)state;
     one_sphere_scene(&s, grey_material());
-    v[0] = vec3f_make(-1.03f, -0.97f, -3.0171f);
-    v[1] = vec3f_make(1.01f, -1.02f, -3.2f);
-    v[2] = vec3f_make(0.99f, 1.07f, -3.3f);
-    v[3] = vec3f_make(-1.1f, 0.93f, -3.1f + 1e-3f);
+    v[0] = vec3d_make(-1.03f, -0.97f, -3.0171f);
+    v[1] = vec3d_make(1.01f, -1.02f, -3.2f);
+    v[2] = vec3d_make(0.99f, 1.07f, -3.3f);
+    v[3] = vec3d_make(-1.1f, 0.93f, -3.1f + 1e-3f);
     for (k = 0; k < 4; k++)
         assert_true(scene_push(&s.poly_verts, &v[k], sizeof v[k]) >= 0);
     pg.first = 0;

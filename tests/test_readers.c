@@ -27,6 +27,13 @@ static void assert_vec(vec3f a, float x, float y, float z)
         fail_msg("vector (%g, %g, %g), expected (%g, %g, %g)", a.x, a.y, a.z, x, y, z);
 }
 
+/* A position (double), as stored. */
+static void assert_pos(vec3d a, double x, double y, double z)
+{
+    if (fabs(a.x - x) > EPS || fabs(a.y - y) > EPS || fabs(a.z - z) > EPS)
+        fail_msg("position (%g, %g, %g), expected (%g, %g, %g)", a.x, a.y, a.z, x, y, z);
+}
+
 static void assert_near(float a, float b)
 {
     if (fabsf(a - b) > EPS * (1.0f + fabsf(b)))
@@ -123,9 +130,9 @@ static void test_nff_entities(void **state)
 
     /* lights: the colourless one gets sqrt(L)/(2L), the coloured one keeps its colour */
     assert_int_equal(s.lights.count, 2);
-    assert_vec(SCENE_AT(s.lights, scene_light, 0).position, 1, 2, 3);
+    assert_pos(SCENE_AT(s.lights, scene_light, 0).position, 1, 2, 3);
     assert_vec(SCENE_AT(s.lights, scene_light, 0).intensity, g, g, g);
-    assert_vec(SCENE_AT(s.lights, scene_light, 1).position, 4, 5, 6);
+    assert_pos(SCENE_AT(s.lights, scene_light, 1).position, 4, 5, 6);
     assert_vec(SCENE_AT(s.lights, scene_light, 1).intensity, 0.5f, 0.25f, 1);
     assert_vec(s.ambient, g, g, g);
 
@@ -149,10 +156,10 @@ static void test_nff_entities(void **state)
     assert_near(m->ior, 1.5f);
 
     assert_int_equal(s.spheres.count, 2);
-    assert_vec(SCENE_AT(s.spheres, scene_sphere, 0).center, 0, 0, -1);
+    assert_pos(SCENE_AT(s.spheres, scene_sphere, 0).center, 0, 0, -1);
     assert_near(SCENE_AT(s.spheres, scene_sphere, 0).radius, 0.5f);
     assert_int_equal(SCENE_AT(s.spheres, scene_sphere, 0).material, 0);
-    assert_vec(SCENE_AT(s.spheres, scene_sphere, 1).center, 1, 2, 3);
+    assert_pos(SCENE_AT(s.spheres, scene_sphere, 1).center, 1, 2, 3);
     assert_near(SCENE_AT(s.spheres, scene_sphere, 1).radius, -2);
     assert_int_equal(SCENE_AT(s.spheres, scene_sphere, 1).material, 1);
 
@@ -161,24 +168,24 @@ static void test_nff_entities(void **state)
     t = &SCENE_AT(s.triangles, scene_triangle, 0);
     assert_null(scene_triangle_normals(&s, t));
     assert_int_equal(t->material, 1);
-    assert_vec(t->p[0], 0, 0, 0);
-    assert_vec(t->p[1], 1, 0, 0);
-    assert_vec(t->p[2], 0, 1, 0);
+    assert_pos(t->p[0], 0, 0, 0);
+    assert_pos(t->p[1], 1, 0, 0);
+    assert_pos(t->p[2], 0, 1, 0);
     t = &SCENE_AT(s.triangles, scene_triangle, 1);
     assert_non_null(scene_triangle_normals(&s, t));
-    assert_vec(t->p[2], 0, 1, 0);
+    assert_pos(t->p[2], 0, 1, 0);
     assert_vec(scene_triangle_normals(&s, t)[0], 0, 0, 1); /* normalised from (0 0 2) */
     assert_vec(scene_triangle_normals(&s, t)[1], 0, 0, 1);
     assert_vec(scene_triangle_normals(&s, t)[2], 1, 0, 0);
     t = &SCENE_AT(s.triangles, scene_triangle, 2);
     assert_non_null(scene_triangle_normals(&s, t));
-    assert_vec(t->p[0], 0, 0, 1);
-    assert_vec(t->p[1], 1, 0, 1);
-    assert_vec(t->p[2], 1, 1, 1);
+    assert_pos(t->p[0], 0, 0, 1);
+    assert_pos(t->p[1], 1, 0, 1);
+    assert_pos(t->p[2], 1, 1, 1);
     t = &SCENE_AT(s.triangles, scene_triangle, 3);
-    assert_vec(t->p[0], 0, 0, 1); /* (v0, v2, v3) */
-    assert_vec(t->p[1], 1, 1, 1);
-    assert_vec(t->p[2], 0, 1, 1);
+    assert_pos(t->p[0], 0, 0, 1); /* (v0, v2, v3) */
+    assert_pos(t->p[1], 1, 1, 1);
+    assert_pos(t->p[2], 0, 1, 1);
     assert_vec(scene_triangle_normals(&s, t)[2], 0, 0, 1);
 
     /* p 5 -> polygon */
@@ -188,19 +195,19 @@ static void test_nff_entities(void **state)
     assert_int_equal(pg->count, 5);
     assert_int_equal(pg->material, 1);
     assert_int_equal(s.poly_verts.count, 5);
-    assert_vec(SCENE_AT(s.poly_verts, vec3f, 3), 1, 2, 0);
+    assert_pos(SCENE_AT(s.poly_verts, vec3d, 3), 1, 2, 0);
 
     /* cones, in both layouts */
     assert_int_equal(s.cones.count, 2);
     c = &SCENE_AT(s.cones, scene_cone, 0);
-    assert_vec(c->base, 0, 0, 0);
+    assert_pos(c->base, 0, 0, 0);
     assert_near(c->base_radius, 1);
-    assert_vec(c->apex, 0, 0, 2);
+    assert_pos(c->apex, 0, 0, 2);
     assert_near(c->apex_radius, 0.5f);
     c = &SCENE_AT(s.cones, scene_cone, 1);
-    assert_vec(c->base, 1, 1, 1);
+    assert_pos(c->base, 1, 1, 1);
     assert_near(c->base_radius, 0.25f);
-    assert_vec(c->apex, 1, 1, 3);
+    assert_pos(c->apex, 1, 1, 3);
     assert_near(c->apex_radius, 0);
     assert_int_equal(c->material, 1);
     scene_free(&s);
@@ -214,7 +221,7 @@ static void test_nff_camera(void **state)
     (void)state;
     parse_ok(nff_parse, VIEW, "cam.nff", &s);
     assert_int_equal(c->projection, SCENE_PERSPECTIVE);
-    assert_vec(c->eye, 0, 0, 5);
+    assert_pos(c->eye, 0, 0, 5);
     assert_vec(c->w, 0, 0, 1);
     assert_vec(c->u, 1, 0, 0);
     assert_vec(c->v, 0, 1, 0);
@@ -542,7 +549,7 @@ static void test_json_all(void **state)
     assert_vec(s.ambient, 0.25f, 0.25f, 0.25f);
 
     assert_int_equal(c->projection, SCENE_PERSPECTIVE);
-    assert_vec(c->eye, 0, 0, 5);
+    assert_pos(c->eye, 0, 0, 5);
     assert_vec(c->u, 1, 0, 0);
     assert_vec(c->v, 0, 1, 0);
     assert_vec(c->w, 0, 0, 1);
@@ -582,12 +589,12 @@ static void test_json_all(void **state)
     assert_near(m->ior, 1.33f);
 
     assert_int_equal(s.lights.count, 2);
-    assert_vec(SCENE_AT(s.lights, scene_light, 0).position, 1, 2, 3);
+    assert_pos(SCENE_AT(s.lights, scene_light, 0).position, 1, 2, 3);
     assert_vec(SCENE_AT(s.lights, scene_light, 0).intensity, 0.5f, 0.6f, 0.7f);
     assert_vec(SCENE_AT(s.lights, scene_light, 1).intensity, 0.2f, 0.2f, 0.2f);
 
     assert_int_equal(s.spheres.count, 1);
-    assert_vec(SCENE_AT(s.spheres, scene_sphere, 0).center, 0, 1, 0);
+    assert_pos(SCENE_AT(s.spheres, scene_sphere, 0).center, 0, 1, 0);
     assert_near(SCENE_AT(s.spheres, scene_sphere, 0).radius, 0.5f);
     assert_int_equal(SCENE_AT(s.spheres, scene_sphere, 0).material, 1);
 
@@ -595,7 +602,7 @@ static void test_json_all(void **state)
     t = &SCENE_AT(s.triangles, scene_triangle, 0);
     assert_null(scene_triangle_normals(&s, t));
     assert_int_equal(t->material, 0);
-    assert_vec(t->p[1], 1, 0, 0);
+    assert_pos(t->p[1], 1, 0, 0);
     t = &SCENE_AT(s.triangles, scene_triangle, 1);
     assert_non_null(scene_triangle_normals(&s, t));
     assert_int_equal(t->material, 1);
@@ -606,7 +613,7 @@ static void test_json_all(void **state)
     assert_int_equal(SCENE_AT(s.polygons, scene_polygon, 0).count, 5);
     assert_int_equal(SCENE_AT(s.polygons, scene_polygon, 0).first, 0);
     assert_int_equal(SCENE_AT(s.polygons, scene_polygon, 0).material, 0);
-    assert_vec(SCENE_AT(s.poly_verts, vec3f, 3), 1, 2, 0);
+    assert_pos(SCENE_AT(s.poly_verts, vec3d, 3), 1, 2, 0);
     assert_int_equal(s.cones.count, 0);
 
     assert_int_equal(scene_finish(&s, 0, 0, 0, err, sizeof err), 0);
@@ -625,7 +632,7 @@ static void test_json_projections(void **state)
              "  \"view\": [0, 0, -2], \"up\": [0, 1, 0], \"window\": [-2, 2, -1, 1.5]}}",
              "ortho.json", &s);
     assert_int_equal(c->projection, SCENE_ORTHOGRAPHIC);
-    assert_vec(c->eye, 1, 2, 3);
+    assert_pos(c->eye, 1, 2, 3);
     assert_vec(c->w, 0, 0, 1);
     assert_vec(c->u, 1, 0, 0);
     assert_near(c->l, -2);

@@ -28,7 +28,7 @@
 
 #define PI 3.14159265358979323846
 
-TU_RENDERER_FIXTURE(1)
+TU_RENDERER_FIXTURE_AT(1, 1) /* rays in world coordinates */
 static char err[2048];
 
 /* ======================================================================================== */
@@ -103,24 +103,27 @@ static void add_face(scene *s, const vec3f q[4], vec3f outward, int mat)
 {
     double n[3], off;
     int axis;
-    vec3f v[4];
+    vec3d v[4];
+    vec3f vf[4];
     int i;
     for (i = 0; i < 4; i++)
-        v[i] = q[i];
-    assert_int_equal(scene_polygon_plane(v, 4, n, &off, &axis), 0);
+        v[i] = tu_d(q[i]);
+    assert_int_equal(scene_polygon_plane(v, 4, NULL, n, &off, &axis), 0);
     if (n[0] * outward.x + n[1] * outward.y + n[2] * outward.z < 0)
         for (i = 0; i < 4; i++)
-            v[i] = q[3 - i];
-    assert_int_equal(scene_polygon_plane(v, 4, n, &off, &axis), 0);
+            v[i] = tu_d(q[3 - i]);
+    assert_int_equal(scene_polygon_plane(v, 4, NULL, n, &off, &axis), 0);
     assert_true(n[0] * outward.x + n[1] * outward.y + n[2] * outward.z > 0);
-    tu_add_polygon(s, v, 4, mat);
+    for (i = 0; i < 4; i++)
+        vf[i] = vec3f_make((float)v[i].x, (float)v[i].y, (float)v[i].z);
+    tu_add_polygon(s, vf, 4, mat);
 }
 
 static void add_cone(scene *s, vec3f base, float r0, vec3f apex, float r1, int mat)
 {
     scene_cone c;
-    c.base = base;
-    c.apex = apex;
+    c.base = tu_d(base);
+    c.apex = tu_d(apex);
     c.base_radius = r0;
     c.apex_radius = r1;
     c.material = mat;
@@ -186,7 +189,7 @@ static void expect_options(const char *const *words, int n, const char *what)
 /* The device arrays as the renderer builds them (host/devscene.c): the same indices. */
 static void host_convert(const scene *s, devscene *h)
 {
-    if (devscene_convert(s, h, err, sizeof err) != 0)
+    if (devscene_convert(s, NULL, h, err, sizeof err) != 0)
         fail_msg("%s", err);
 }
 

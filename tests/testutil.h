@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "render.h"
+#include "render_debug.h"
 #include "scene.h"
 #include "scene_geom.h"
 #include "types.h"
@@ -33,11 +34,17 @@ static inline uint64_t tu_rng_next(void)
     return z ^ (z >> 31);
 }
 
+/* A float vector as a scene position (scene.h keeps positions in double). */
+static inline vec3d tu_d(vec3f a)
+{
+    return vec3d_make(a.x, a.y, a.z);
+}
+
 /* Scenes built in code: one primitive appended to s. */
 static inline void tu_add_sphere(scene *s, double x, double y, double z, double r, int mat)
 {
     scene_sphere sp;
-    sp.center = vec3f_make((float)x, (float)y, (float)z);
+    sp.center = vec3d_make(x, y, z);
     sp.radius = (float)r;
     sp.material = mat;
     assert_true(scene_push(&s->spheres, &sp, sizeof sp) >= 0);
@@ -47,9 +54,9 @@ static inline void tu_add_triangle(scene *s, vec3f a, vec3f b, vec3f c, int mat)
 {
     scene_triangle t;
     memset(&t, 0, sizeof t);
-    t.p[0] = a;
-    t.p[1] = b;
-    t.p[2] = c;
+    t.p[0] = tu_d(a);
+    t.p[1] = tu_d(b);
+    t.p[2] = tu_d(c);
     t.material = mat;
     assert_true(scene_push(&s->triangles, &t, sizeof t) >= 0);
 }
@@ -61,8 +68,10 @@ static inline void tu_add_polygon(scene *s, const vec3f *v, int n, int mat)
     p.first = (int)s->poly_verts.count;
     p.count = n;
     p.material = mat;
-    for (i = 0; i < n; i++)
-        assert_true(scene_push(&s->poly_verts, &v[i], sizeof v[i]) >= 0);
+    for (i = 0; i < n; i++) {
+        vec3d q = tu_d(v[i]);
+        assert_true(scene_push(&s->poly_verts, &q, sizeof q) >= 0);
+    }
     assert_true(scene_push(&s->polygons, &p, sizeof p) >= 0);
 }
 
@@ -89,7 +98,7 @@ static inline void tu_base_scene(scene *s, enum scene_projection proj, float eye
 {
     scene_init(s);
     s->camera.projection = proj;
-    s->camera.eye = vec3f_make(0, 0, eye_z);
+    s->camera.eye = vec3d_make(0, 0, eye_z);
     s->camera.u = vec3f_make(1, 0, 0);
     s->camera.v = vec3f_make(0, 1, 0);
     s->camera.w = vec3f_make(0, 0, 1);
@@ -122,7 +131,7 @@ static inline int tu_add_material(scene *s, vec3f ka, vec3f kd, vec3f ks, vec3f 
 static inline void tu_add_light(scene *s, vec3f pos, vec3f intensity)
 {
     scene_light l;
-    l.position = pos;
+    l.position = tu_d(pos);
     l.intensity = intensity;
     assert_true(scene_push(&s->lights, &l, sizeof l) >= 0);
 }
@@ -158,18 +167,24 @@ static inline int tu_renderer_close(renderer **r)
 }
 
 /* A suite's group fixture: defines `static renderer *R` and the cmocka group functions
- * setup() and teardown() that open and close it (tu_renderer_open). */
-#define TU_RENDERER_FIXTURE(show_device)                                                           \
+ * setup() and teardown() that open and close it (tu_renderer_open). With world_origin set,
+ * the kernels see world coordinates (renderer_debug_world_origin): for the suites that give
+ * the kernels rays in world coordinates through the test hooks, or expect them back. */
+#define TU_RENDERER_FIXTURE_AT(show_device, world_origin)                                          \
     static renderer *R;                                                                            \
     static int setup(void **state)                                                                 \
     {                                                                                              \
         (void)state;                                                                               \
-        return tu_renderer_open(&R, show_device);                                                  \
+        if (tu_renderer_open(&R, show_device) != 0)                                                \
+            return -1;                                                                             \
+        renderer_debug_world_origin(R, world_origin);                                              \
+        return 0;                                                                                  \
     }                                                                                              \
     static int teardown(void **state)                                                              \
     {                                                                                              \
         (void)state;                                                                               \
         return tu_renderer_close(&R);                                                              \
     }
+#define TU_RENDERER_FIXTURE(show_device) TU_RENDERER_FIXTURE_AT(show_device, 0)
 
 #endif
