@@ -325,13 +325,11 @@ static int parse(job *j, int argc, char **argv, int *status)
         close(saved_out);
         close(saved_err);
     }
-    if (rc == CLI_RUN &&
-        (j->o.preview || j->o.nscenes > 1 || j->o.settings.crop[1] != 0 || j->o.camera)) {
+    if (rc == CLI_RUN && (j->o.preview || j->o.nscenes > 1 || j->o.settings.crop[1] != 0)) {
         if (j->rank == 0)
             fprintf(stderr, "clwhitted-mpi: %s is not available over MPI\n" CLI_HINT,
                     j->o.preview       ? "--preview"
                     : j->o.nscenes > 1 ? "more than one scene"
-                    : j->o.camera      ? "--camera"
                                        : "--crop");
         *status = 2;
         return CLI_EXIT;
