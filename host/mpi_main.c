@@ -76,7 +76,8 @@ static char *default_output(const char *scene_path)
     return out;
 }
 
-/* This rank's set-up: scene, device, settings, memory check, upload and kernels. */
+/* This rank's set-up for scene o->scene: scene, device (the first time), settings, memory
+ * check, upload and kernels. */
 static int setup(job *j, setup_report *rep)
 {
     char spec[256], *err = rep->err;
@@ -96,8 +97,8 @@ static int setup(job *j, setup_report *rep)
     if (scene_load(o->scene, &j->s, err, errlen) != 0 ||
         (o->camera && scene_load_camera(o->camera, &j->s, err, errlen) != 0) ||
         scene_finish(&j->s, o->width, o->height, o->depth, err, errlen) != 0 ||
-        renderer_create(&j->r, device_spec(o->device, j->local_rank, spec, sizeof spec), err,
-                        errlen) != 0 ||
+        (!j->r && renderer_create(&j->r, device_spec(o->device, j->local_rank, spec, sizeof spec),
+                                  err, errlen) != 0) ||
         renderer_set_settings(j->r, &o->settings, err, errlen) != 0 ||
         renderer_check_memory(j->r, j->s.width, j->s.height, err, errlen) != 0 ||
         renderer_set_scene(j->r, &j->s, err, errlen) != 0)
@@ -284,10 +285,11 @@ static int render(job *j, progress_bar *bar)
 
 static void usage(void)
 {
-    printf("usage: mpirun [-np N] clwhitted-mpi [options] SCENE\n"
+    printf("usage: mpirun [-np N] clwhitted-mpi [options] SCENE...\n"
            "Renders SCENE across the ranks of an MPI job: the image is the one clwhitted\n"
-           "renders with the same options, bit for bit. The options are clwhitted's\n"
-           "(clwhitted --help) but --preview; --device A,B,... gives a node's local rank L\n"
+           "renders with the same options, bit for bit; several scenes one after the other,\n"
+           "each to its own NAME.exr. The options are clwhitted's (clwhitted --help) but\n"
+           "--preview and --crop; --device A,B,... gives a node's local rank L\n"
            "entry L modulo their count. Environment: CLWHITTED_MPI_TILE_ROWS (rows per tile),\n"
            "CLWHITTED_MPI_TIMEOUT (seconds a busy rank may stay silent; default 60, 0 off).\n"
            "See docs/mpi.md.\n");
@@ -325,12 +327,10 @@ static int parse(job *j, int argc, char **argv, int *status)
         close(saved_out);
         close(saved_err);
     }
-    if (rc == CLI_RUN && (j->o.preview || j->o.nscenes > 1 || j->o.settings.crop[1] != 0)) {
+    if (rc == CLI_RUN && (j->o.preview || j->o.settings.crop[1] != 0)) {
         if (j->rank == 0)
             fprintf(stderr, "clwhitted-mpi: %s is not available over MPI\n" CLI_HINT,
-                    j->o.preview       ? "--preview"
-                    : j->o.nscenes > 1 ? "more than one scene"
-                                       : "--crop");
+                    j->o.preview ? "--preview" : "--crop");
         *status = 2;
         return CLI_EXIT;
     }
@@ -344,7 +344,7 @@ int main(int argc, char **argv)
     progress_bar bar;
     MPI_Comm local;
     job j;
-    int status = 1;
+    int status = 1, k;
 
     memset(&j, 0, sizeof j);
     j.start = sys_now();
@@ -372,13 +372,30 @@ int main(int argc, char **argv)
     }
     progress_init(&bar, stderr,
                   j.rank == 0 && progress_wanted(j.o.quiet, j.o.progress, isatty(STDERR_FILENO)));
-    memset(&rep, 0, sizeof rep);
-    if (j.rank == 0)
-        progress_status(&bar, "loading the scene and building the kernels ...");
-    rep.ok = setup(&j, &rep) == 0;
-    progress_clear(&bar);
-    status = gather_setups(&j, &rep) == 0 ? render(&j, &bar) : 1;
-    MPI_Bcast(&status, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    /* Several scenes: one after the other, each across every rank, each to its own
+     * NAME.exr (as clwhitted); a scene that fails is reported and the next still renders,
+     * the exit status is the worst. */
+    status = 0;
+    for (k = 0; k < j.o.nscenes; k++) {
+        int st;
+        j.o.scene = j.o.scenes[k];
+        j.start = sys_now();
+        scene_free(&j.s);
+        scene_init(&j.s);
+        free(j.default_out);
+        j.default_out = NULL;
+        j.output = NULL;
+        memset(&j.mine, 0, sizeof j.mine);
+        memset(&rep, 0, sizeof rep);
+        if (j.rank == 0)
+            progress_status(&bar, "loading the scene and building the kernels ...");
+        rep.ok = setup(&j, &rep) == 0;
+        progress_clear(&bar);
+        st = gather_setups(&j, &rep) == 0 ? render(&j, &bar) : 1;
+        MPI_Bcast(&st, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        if (st > status)
+            status = st;
+    }
 out_finalize:
     renderer_destroy(j.r);
     scene_free(&j.s);

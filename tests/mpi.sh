@@ -118,9 +118,26 @@ check_true "--preview is a usage error" has "--preview is not available over MPI
 timeout 60 $RUN -np 2 "$MPI" --crop 0,8,0,8 -o "$T/c.exr" scenes/default.json >"$T/log" 2>&1
 check "--crop: exit 2" 2 $?
 check_true "--crop is a usage error" has "--crop is not available over MPI"
-timeout 60 $RUN -np 2 "$MPI" scenes/default.json scenes/oblique.json >"$T/log" 2>&1
-check "two scenes: exit 2" 2 $?
-check_true "two scenes are a usage error" has "more than one scene is not available over MPI"
+
+# ---- several scenes: one after the other, each to its own NAME.exr, clwhitted's pixels -----
+ROOT=$(pwd)
+mkdir "$T/multi" "$T/multi1"
+(cd "$T/multi" && timeout 120 $RUN -np 2 "$ROOT/$MPI" -q -W 40 -H 30 "$ROOT/scenes/default.json" \
+    "$ROOT/scenes/oblique.json" </dev/null >"$T/log" 2>&1)
+check "two scenes on 2 ranks" 0 $?
+(cd "$T/multi1" && "$ROOT/$BUILD/clwhitted" -q -W 40 -H 30 "$ROOT/scenes/default.json" \
+    "$ROOT/scenes/oblique.json" >"$T/log" 2>&1)
+check "two scenes: clwhitted" 0 $?
+for name in default oblique; do
+    check_true "two scenes: $name.exr has clwhitted's pixels" \
+        same_pixels "$T/multi1/$name.exr" "$T/multi/$name.exr"
+done
+rm -f "$T/multi/default.exr"
+(cd "$T/multi" && timeout 120 $RUN -np 2 "$ROOT/$MPI" -q -W 40 -H 30 missing.nff \
+    "$ROOT/scenes/default.json" </dev/null >"$T/log" 2>&1)
+check "a bad scene among several: exit 1" 1 $?
+check_true "a bad scene among several: named" has "missing.nff"
+check_true "a bad scene among several: the next still renders" test -s "$T/multi/default.exr"
 
 # ---- failures: a non-zero exit, the rank's message on rank 0, no image ---------------------
 fail_case() { # fail_case NAME MESSAGE MPIRUN-ARGS...
