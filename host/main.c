@@ -9,6 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "batch.h"
 #include "cli.h"
 #include "image.h"
 #include "preview.h"
@@ -17,7 +18,6 @@
 #include "scene.h"
 #include "scene_load.h"
 #include "sys.h"
-#include "version.h"
 
 /* Full teardown at exit only where a leak checker looks: sanitizer builds (LeakSanitizer
  * checks at exit) or -DCW_FULL_TEARDOWN=1. Otherwise a successful batch render ends with
@@ -107,24 +107,6 @@ static void fail_msg(progress_bar *bar, const char *msg)
     fprintf(stderr, "clwhitted: %s\n", sys_escape(shown, sizeof shown, msg));
 }
 
-/* "dir/name.nff" -> "name.exr" in the current folder (the name as scene_set_name makes
- * it from the scene's path). */
-static char *default_output(const char *scene_path)
-{
-    scene tmp;
-    char *out = NULL;
-    size_t n;
-    scene_init(&tmp);
-    if (scene_set_name(&tmp, scene_path) == 0) {
-        n = strlen(tmp.name) + 5;
-        out = malloc(n);
-        if (out)
-            snprintf(out, n, "%s.exr", tmp.name);
-    }
-    scene_free(&tmp);
-    return out;
-}
-
 /* The summary on stdout reached it: fails on a write error other than a closed pipe
  * (whose reader no longer wants it). Returns the exit status. */
 static int summary_written(void)
@@ -136,41 +118,6 @@ static int summary_written(void)
     fprintf(stderr, "clwhitted: cannot write the summary to the standard output: %s\n",
             strerror(errno));
     return 1;
-}
-
-/* The metadata of the image: title (the scene file's base name), software, device, the
- * settings (as the format uses them) and the render time. Strings live in the buffers. */
-static void set_metadata(const cli_options *o, const char *path, const scene *s, const renderer *r,
-                         int is_exr, double render_s, image_write_opts *w, char *title,
-                         size_t ntitle, char *software, size_t nsoftware, char *settings,
-                         size_t nsettings)
-{
-    const char *slash = strrchr(path, '/');
-    const render_settings *st = &o->settings;
-    const char *precision = st->precision == RENDER_FAST ? "fast" : "robust";
-    char samples[32], crop[64] = "";
-    snprintf(software, nsoftware, "clwhitted %s", CW_VERSION);
-    snprintf(title, ntitle, "%s", slash ? slash + 1 : path);
-    if (st->spd) /* the corners; --spp is rejected with --spd */
-        snprintf(samples, sizeof samples, "spd");
-    else
-        snprintf(samples, sizeof samples, "spp %d", st->spp);
-    if (st->crop[1] != 0)
-        snprintf(crop, sizeof crop, ", crop %d,%d,%d,%d", st->crop[0], st->crop[1], st->crop[2],
-                 st->crop[3]);
-    if (is_exr)
-        snprintf(settings, nsettings, "%dx%d%s, depth %d, %s, precision %s%s", s->width, s->height,
-                 crop, s->max_depth, samples, precision, w->half ? ", half floats" : "");
-    else
-        snprintf(settings, nsettings,
-                 "%dx%d%s, depth %d, %s, precision %s, exposure %+g EV, tonemap %s%s", s->width,
-                 s->height, crop, s->max_depth, samples, precision, w->exposure,
-                 image_tonemap_name(w->tonemap), w->png16 ? ", 16-bit" : "");
-    w->title = title;
-    w->software = software;
-    w->source = renderer_device_name(r);
-    w->comment = settings;
-    w->render_s = render_s;
 }
 
 /* The summary line (short: the output, its size, the time, the rate, and the kernel
@@ -234,7 +181,8 @@ typedef struct {
 static int render_batch(cli_options *o, const char *path, batch *b, progress_bar *bar,
                         batch_times *t)
 {
-    char err[2048], title[256], software[64], settings[320];
+    char err[2048];
+    batch_meta meta;
     const char *output = o->output ? o->output : b->default_out;
     const scene *s = &b->s;
     renderer *r;
@@ -271,8 +219,7 @@ static int render_batch(cli_options *o, const char *path, batch *b, progress_bar
     t->rendered = sys_now();
     renderer_get_stats(r, &st);
     trace_s = st.trace_s > 0 ? st.trace_s : t->rendered - t->set_up;
-    set_metadata(o, path, s, r, is_exr, trace_s, &o->write, title, sizeof title, software,
-                 sizeof software, settings, sizeof settings);
+    batch_metadata(o, path, s, r, is_exr, trace_s, NULL, &o->write, &meta);
     if (image_write_ex(&b->img, output, &o->write, err, sizeof err) != 0) {
         fail_msg(bar, err);
         return 1;
@@ -290,7 +237,7 @@ static int check_output(const cli_options *o, int k, batch *b, progress_bar *bar
     char err[2048];
     free(b->default_out);
     b->default_out = NULL;
-    if (!o->output && !(b->default_out = default_output(o->scenes[k]))) {
+    if (!o->output && !(b->default_out = batch_default_output(o->scenes[k]))) {
         fail_msg(bar, "out of memory");
         return -1;
     }

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "batch.h"
 #include "cli.h"
 #include "image.h"
 #include "mpi_work.h"
@@ -17,7 +18,6 @@
 #include "scene.h"
 #include "scene_load.h"
 #include "sys.h"
-#include "version.h"
 
 /* What a rank reports after its set-up. */
 typedef struct {
@@ -59,23 +59,6 @@ static const char *device_spec(const char *spec, int local_rank, char *buf, size
     return buf;
 }
 
-/* "dir/name.nff" -> "name.exr" (as clwhitted names it). */
-static char *default_output(const char *scene_path)
-{
-    scene tmp;
-    char *out = NULL;
-    size_t n;
-    scene_init(&tmp);
-    if (scene_set_name(&tmp, scene_path) == 0) {
-        n = strlen(tmp.name) + 5;
-        out = malloc(n);
-        if (out)
-            snprintf(out, n, "%s.exr", tmp.name);
-    }
-    scene_free(&tmp);
-    return out;
-}
-
 /* This rank's set-up for scene o->scene: scene, device (the first time), settings, memory
  * check, upload and kernels. */
 static int setup(job *j, setup_report *rep)
@@ -86,7 +69,7 @@ static int setup(job *j, setup_report *rep)
     double t0 = sys_now();
 
     if (j->rank == 0) {
-        if (!o->output && !(j->default_out = default_output(o->scene))) {
+        if (!o->output && !(j->default_out = batch_default_output(o->scene))) {
             snprintf(err, errlen, "out of memory");
             return -1;
         }
@@ -151,35 +134,6 @@ static int gather_setups(const job *j, const setup_report *mine)
     return ok ? 0 : -1;
 }
 
-/* The image's metadata, as clwhitted's with the number of ranks. */
-static void set_metadata(const job *j, double render_s, image_write_opts *w, char *title,
-                         size_t ntitle, char *software, size_t nsoftware, char *settings,
-                         size_t nsettings)
-{
-    const char *slash = strrchr(j->o.scene, '/');
-    const render_settings *st = &j->o.settings;
-    const char *precision = st->precision == RENDER_FAST ? "fast" : "robust";
-    int n;
-    snprintf(software, nsoftware, "clwhitted %s", CW_VERSION);
-    snprintf(title, ntitle, "%s", slash ? slash + 1 : j->o.scene);
-    n = snprintf(settings, nsettings, "%dx%d, depth %d, spp %d, precision %s%s", j->s.width,
-                 j->s.height, j->s.max_depth, st->spp, precision, st->spd ? ", spd" : "");
-    if (n > 0 && (size_t)n < nsettings) {
-        if (sys_has_ext(j->output, ".exr"))
-            snprintf(settings + n, nsettings - (size_t)n, "%s, %d MPI ranks",
-                     w->half ? ", half floats" : "", j->size);
-        else
-            snprintf(settings + n, nsettings - (size_t)n,
-                     ", exposure %+g EV, tonemap %s, %d MPI ranks", w->exposure,
-                     image_tonemap_name(w->tonemap), j->size);
-    }
-    w->title = title;
-    w->software = software;
-    w->source = renderer_device_name(j->r);
-    w->comment = settings;
-    w->render_s = render_s;
-}
-
 /* The summary and, with --stats, the ray counts over the ranks and each rank's share. */
 static void report(const job *j, const mwork_rank *all, double render_s, double total_s)
 {
@@ -218,15 +172,17 @@ static void report(const job *j, const mwork_rank *all, double render_s, double 
 /* Rank 0 after the render: the image from the accumulation, written atomically. */
 static int finish(job *j, const float *acc, const mwork_rank *all, double render_s)
 {
-    char err[2048], title[256], software[64], settings[320];
+    char err[2048], ranks[32];
+    batch_meta meta;
     image img = {0, 0, NULL};
     int rc = 1;
     if (renderer_resolve(j->r, acc, &img, err, sizeof err) != 0) {
         say(err);
         return 1;
     }
-    set_metadata(j, render_s, &j->o.write, title, sizeof title, software, sizeof software, settings,
-                 sizeof settings);
+    snprintf(ranks, sizeof ranks, ", %d MPI ranks", j->size);
+    batch_metadata(&j->o, j->o.scene, &j->s, j->r, sys_has_ext(j->output, ".exr"), render_s, ranks,
+                   &j->o.write, &meta);
     if (image_write_ex(&img, j->output, &j->o.write, err, sizeof err) != 0) {
         say(err);
     } else {

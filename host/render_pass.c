@@ -193,9 +193,7 @@ int rpass_ensure_image(renderer *r, char *err, size_t errlen)
 
 int rpass_clear_accumulation(renderer *r, char *err, size_t errlen)
 {
-    size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    return rpass_ensure_image(r, err, errlen) ||
-           rpass_fill_zero(r, r->image, n * 4 * sizeof(cl_float), "image", err, errlen);
+    return rpass_clear_rows(r, 0, r->host_frame.ny, err, errlen);
 }
 
 int rpass_clear_rows(renderer *r, int row0, int nrows, char *err, size_t errlen)
@@ -207,7 +205,7 @@ int rpass_clear_rows(renderer *r, int row0, int nrows, char *err, size_t errlen)
     e = clEnqueueFillBuffer(r->queue, r->image, &zero, sizeof zero, row_bytes * (size_t)row0,
                             row_bytes * (size_t)nrows, 0, NULL, NULL);
     if (e != CL_SUCCESS)
-        return rpass_fail(e, "clEnqueueFillBuffer(image rows)", r, err, errlen);
+        return rpass_fail(e, "clEnqueueFillBuffer(image)", r, err, errlen);
     return 0;
 }
 
