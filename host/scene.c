@@ -7,6 +7,8 @@
 #include <string.h>
 
 #include "scene_geom.h"
+#include "scene_mesh.h"
+#include "xform.h"
 
 /* The messages below say "2^28 pixels". */
 _Static_assert(CW_MAX_PIXELS == 1L << 28, "CW_MAX_PIXELS is not 2^28: fix the messages");
@@ -37,6 +39,11 @@ void scene_free(scene *s)
     array_free(&s->polygons);
     array_free(&s->poly_verts);
     array_free(&s->cones);
+    for (size_t i = 0; i < s->meshes.count; i++)
+        free(SCENE_AT(s->meshes, scene_mesh, i).source);
+    array_free(&s->meshes);
+    array_free(&s->mesh_tris);
+    array_free(&s->instances);
     scene_init(s);
 }
 
@@ -57,7 +64,8 @@ long scene_push(scene_array *a, const void *elem, size_t elem_size)
     return (long)a->count++;
 }
 
-long scene_push_triangle(scene *s, const vec3d p[3], const vec3f *n, int material)
+static long push_triangle(scene *s, scene_array *dst, const vec3d p[3], const vec3f *n,
+                          int material)
 {
     scene_triangle t;
     memcpy(t.p, p, sizeof t.p);
@@ -72,7 +80,17 @@ long scene_push_triangle(scene *s, const vec3d p[3], const vec3f *n, int materia
                 return -1;
         t.normals = (int)first + 1;
     }
-    return scene_push(&s->triangles, &t, sizeof t);
+    return scene_push(dst, &t, sizeof t);
+}
+
+long scene_push_triangle(scene *s, const vec3d p[3], const vec3f *n, int material)
+{
+    return push_triangle(s, &s->triangles, p, n, material);
+}
+
+long scene_push_mesh_triangle(scene *s, const vec3d p[3], const vec3f *n, int material)
+{
+    return push_triangle(s, &s->mesh_tris, p, n, material);
 }
 
 const vec3f *scene_triangle_normals(const scene *s, const scene_triangle *t)
@@ -142,6 +160,31 @@ static int check_material_index(const char *name, int m, size_t count, const cha
     return 0;
 }
 
+static int check_triangles(const scene *s, const scene_array *tris, const char *what, char *err,
+                           size_t errlen)
+{
+    const char *name = s->name ? s->name : "scene";
+    size_t i, nm = s->materials.count;
+    for (i = 0; i < tris->count; i++) {
+        const scene_triangle *t = &SCENE_AT(*tris, scene_triangle, i);
+        const vec3f *n;
+        int k;
+        if (t->normals < 0 || (t->normals > 0 && (size_t)t->normals + 2 > s->tri_normals.count))
+            return fail_item(err, errlen, name, what, i, "has invalid vertex normals");
+        n = scene_triangle_normals(s, t);
+        for (k = 0; k < 3; k++)
+            if (!finite3d(t->p[k]) || (n && !finite3(n[k])))
+                return fail_item(err, errlen, name, what, i, "has non-finite values");
+        if (n)
+            for (k = 0; k < 3; k++)
+                if (!(vec3f_length(n[k]) > 0.0f))
+                    return fail_item(err, errlen, name, what, i, "has a zero vertex normal");
+        if (check_material_index(name, t->material, nm, what, i, err, errlen) != 0)
+            return -1;
+    }
+    return 0;
+}
+
 int scene_check(const scene *s, char *err, size_t errlen)
 {
     const scene_camera *c = &s->camera;
@@ -173,22 +216,25 @@ int scene_check(const scene *s, char *err, size_t errlen)
         if (check_material_index(name, sp->material, nm, "sphere", i, err, errlen) != 0)
             return -1;
     }
-    for (i = 0; i < s->triangles.count; i++) {
-        const scene_triangle *t = &SCENE_AT(s->triangles, scene_triangle, i);
-        const vec3f *n;
-        int k;
-        if (t->normals < 0 || (t->normals > 0 && (size_t)t->normals + 2 > s->tri_normals.count))
-            return fail_item(err, errlen, name, "triangle", i, "has invalid vertex normals");
-        n = scene_triangle_normals(s, t);
-        for (k = 0; k < 3; k++)
-            if (!finite3d(t->p[k]) || (n && !finite3(n[k])))
-                return fail_item(err, errlen, name, "triangle", i, "has non-finite values");
-        if (n)
-            for (k = 0; k < 3; k++)
-                if (!(vec3f_length(n[k]) > 0.0f))
-                    return fail_item(err, errlen, name, "triangle", i, "has a zero vertex normal");
-        if (check_material_index(name, t->material, nm, "triangle", i, err, errlen) != 0)
+    if (check_triangles(s, &s->triangles, "triangle", err, errlen) != 0 ||
+        check_triangles(s, &s->mesh_tris, "mesh triangle", err, errlen) != 0)
+        return -1;
+    for (i = 0; i < s->meshes.count; i++) {
+        const scene_mesh *m = &SCENE_AT(s->meshes, scene_mesh, i);
+        if (m->first > s->mesh_tris.count || m->count > s->mesh_tris.count - m->first)
+            return fail_item(err, errlen, name, "mesh", i, "has invalid triangles");
+    }
+    for (i = 0; i < s->instances.count; i++) {
+        const scene_instance *in = &SCENE_AT(s->instances, scene_instance, i);
+        scene_xform inv;
+        if (in->mesh < 0 || (size_t)in->mesh >= s->meshes.count)
+            return fail_item(err, errlen, name, "instance", i, "places a mesh that does not exist");
+        if (in->material != -1 &&
+            check_material_index(name, in->material, nm, "instance", i, err, errlen) != 0)
             return -1;
+        if (xform_invert(&in->to_world, &inv) != 0)
+            return fail_item(err, errlen, name, "instance", i,
+                             "has a transform that is not finite or not invertible");
     }
     for (i = 0; i < s->polygons.count; i++) {
         const scene_polygon *p = &SCENE_AT(s->polygons, scene_polygon, i);
@@ -296,6 +342,11 @@ int scene_finish(scene *s, int width, int height, int max_depth, char *err, size
     if (!known_projection(&s->camera))
         return scene_check(s, err, errlen); /* names the bad projection */
     if (finish_view(s, msg, sizeof msg) != 0) {
+        snprintf(err, errlen, "%s: %s", name, msg);
+        return -1;
+    }
+    /* a mesh placed once is plain triangles: only shared meshes stay instances */
+    if (scene_flatten_instances(s, 0, msg, sizeof msg) != 0) {
         snprintf(err, errlen, "%s: %s", name, msg);
         return -1;
     }

@@ -77,6 +77,28 @@ typedef struct {
     int material;
 } scene_cone;
 
+/* A mesh read from a file (host/mesh_import.c): its triangles (scene_triangle, vertex
+ * normals in scene.tri_normals as for any triangle) kept in the mesh's own coordinates in
+ * scene.mesh_tris, and placed in the world only by instances (scene_mesh.h). */
+typedef struct {
+    size_t first, count; /* its triangles: scene.mesh_tris[first .. first + count) */
+    char *source;        /* the file it was read from, for messages (owned; may be NULL) */
+} scene_mesh;
+
+/* An affine transform in double precision: p' = A p + t, with m[4r + c] = A[r][c] for
+ * c < 3 and m[4r + 3] = t[r] (row-major 3x4). host/xform.h composes and applies them. */
+typedef struct {
+    double m[12];
+} scene_xform;
+
+/* One placement of a mesh in the world. */
+typedef struct {
+    int mesh;             /* index into scene.meshes */
+    int material;         /* >= 0: every triangle of the mesh takes this material here;
+                           * -1: each keeps its own */
+    scene_xform to_world; /* mesh coordinates to world coordinates; invertible */
+} scene_instance;
+
 /* A growable array of elements of one type. */
 typedef struct {
     void *data;
@@ -99,6 +121,9 @@ typedef struct {
     scene_array polygons;    /* scene_polygon */
     scene_array poly_verts;  /* vec3d */
     scene_array cones;       /* scene_cone: open cones and cylinders */
+    scene_array meshes;      /* scene_mesh */
+    scene_array mesh_tris;   /* scene_triangle: the meshes' triangles, in mesh coordinates */
+    scene_array instances;   /* scene_instance: placements of the meshes */
 } scene;
 
 #define SCENE_AT(arr, type, i) (((type *)(arr).data)[i])
@@ -118,16 +143,23 @@ long scene_push(scene_array *a, const void *elem, size_t elem_size);
  * Returns its index or -1 when out of memory. */
 long scene_push_triangle(scene *s, const vec3d p[3], const vec3f *n, int material);
 
+/* The same for a triangle of a mesh, in mesh coordinates (scene.mesh_tris); the caller
+ * then sets the mesh's count. */
+long scene_push_mesh_triangle(scene *s, const vec3d p[3], const vec3f *n, int material);
+
 /* The three vertex normals of triangle t, or NULL when it is flat. */
 const vec3f *scene_triangle_normals(const scene *s, const scene_triangle *t);
 
 /* Completes a loaded scene for the given image size (width/height may be 0 to keep the
- * scene's own): derives the NFF window, checks that the camera basis is orthonormal.
+ * scene's own): derives the NFF window, checks that the camera basis is orthonormal,
+ * flattens the instances of meshes placed only once (scene_mesh.h).
  * Returns 0, or -1 with a message in err. */
 int scene_finish(scene *s, int width, int height, int max_depth, char *err, size_t errlen);
 
 /* Checks a scene's consistency: a known projection, finite values everywhere, material
- * indices in range, polygon vertex ranges inside poly_verts, non-zero vertex normals.
+ * indices in range, polygon vertex ranges inside poly_verts, non-zero vertex normals,
+ * mesh triangle ranges inside mesh_tris, instances of existing meshes with finite,
+ * invertible transforms.
  * scene_finish calls it. Returns 0, or -1 with "name: what is wrong" in err. */
 int scene_check(const scene *s, char *err, size_t errlen);
 
