@@ -3,6 +3,8 @@
 
 #include <stdio.h>
 
+#include "mesh_import.h"
+#include "mesh_scene.h"
 #include "scene_json.h"
 #include "scene_nff.h"
 #include "sys.h"
@@ -22,6 +24,11 @@ int scene_load(const char *path, scene *s, char *err, size_t errlen)
         return json_scene_load(path, s, err, errlen);
     if (sys_has_ext(path, ".nff"))
         return nff_load(path, s, err, errlen);
-    snprintf(err, errlen, "%s: unknown scene format (expected a .nff or .json file)", path);
+    if (mesh_is_mesh_file(path))
+        return mesh_scene_load(path, s, err, errlen);
+    snprintf(err, errlen,
+             "%s: unknown scene format (expected a .nff or .json scene, or a .obj, .ply, .gltf, "
+             ".glb or .stl mesh)",
+             path);
     return -1;
 }

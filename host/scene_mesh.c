@@ -63,8 +63,8 @@ static int flatten_one(scene *s, const scene_instance *in, char *err, size_t err
                 return -1;
             }
         }
-        if (scene_push_triangle(s, p, n0 ? n : NULL, in->material >= 0 ? in->material : tr.material) <
-            0) {
+        if (scene_push_triangle(s, p, n0 ? n : NULL,
+                                in->material >= 0 ? in->material : tr.material) < 0) {
             snprintf(err, errlen, "out of memory flattening an instance of mesh %d", in->mesh);
             return -1;
         }
