@@ -19,9 +19,10 @@ void clprog_options(const clprog_features *ft, int max_depth, int spd, int fast,
     int deep = max_depth > 1;
     snprintf(buf, n,
              "-cl-std=CL1.2 -Werror -DCW_HAS_SPHERES=%d -DCW_HAS_TRIANGLES=%d "
-             "-DCW_HAS_POLYGONS=%d -DCW_HAS_CONES=%d -DCW_HAS_MIRRORS=%d "
+             "-DCW_HAS_POLYGONS=%d -DCW_HAS_CONES=%d -DCW_HAS_INSTANCES=%d -DCW_HAS_MIRRORS=%d "
              "-DCW_HAS_REFRACTION=%d -DCW_FAST=%d -DCW_STATS=%d -DCW_PIXEL=%d%s%s%s",
              ft->spheres > 0, ft->triangles > 0, ft->polygons > 0, ft->cones > 0,
+             ft->instances > 0 && ft->triangles > 0,
              deep && (ft->mirrors || (spd && ft->transmitters)), deep && ft->transmitters,
              fast != 0, stats != 0, pixel != 0, fast ? " -cl-fast-relaxed-math" : "",
              extra ? " " : "", extra ? extra : "");

@@ -9,6 +9,7 @@
 /* What the scene uses, decided once at upload: the kernel features come from it. */
 typedef struct {
     int spheres, triangles, polygons, cones; /* primitives uploaded (degenerate ones dropped) */
+    int instances;                           /* placed meshes (the two-level BVH) */
     int mirrors;                             /* some material has km > 0 */
     int transmitters;                        /* some material has kt > 0 */
 } clprog_features;

@@ -15,7 +15,7 @@
 /* One line per kernel buffer of kernels/world.h: where its host array is, and its length. */
 #define DEVSCENE_ARRAYS(X)                                                                         \
     X(nodes, ds->tree_wide.nodes, ds->tree_wide.num_nodes)                                         \
-    X(refs, ds->refs, ds->tree.num_refs)                                                           \
+    X(refs, ds->refs, ds->nrefs)                                                                   \
     X(spheres, ds->sph, ds->nsph)                                                                  \
     X(triangles, ds->tri, ds->ntri)                                                                \
     X(tri_blocks, ds->tri_blocks, ds->nblocks)                                                     \
@@ -23,7 +23,8 @@
     X(polygons, ds->pg, ds->npg)                                                                   \
     X(poly_verts, ds->verts, ds->nverts)                                                           \
     X(poly_bands, ds->bands, ds->nbands)                                                           \
-    X(cones, ds->cones, ds->ncone)
+    X(cones, ds->cones, ds->ncone)                                                                 \
+    X(instances, ds->inst, ds->ninst)
 
 void devscene_world_arrays(const devscene *ds, devscene_world *w)
 {
@@ -94,20 +95,23 @@ void devscene_free(devscene *ds)
     free(ds->boxes);
     free(ds->box_ref);
     free(ds->refs);
+    free(ds->inst);
+    free(ds->meshes);
+    free(ds->mesh_boxes);
+    free(ds->mesh_box_ref);
     bvh_free(&ds->tree);
     bvhw_free(&ds->tree_wide);
 }
 
 /* Adds the box of primitive ref, widened by a relative margin so that rounding in the
  * kernels' intersection tests never puts a hit just outside its box. */
-static int push_box(devscene *ds, const bvh_box *b, int ref)
+void devscene_push_box(devscene *ds, const bvh_box *b, int ref)
 {
     bvh_box bb = *b;
     box_widen(bb.lo, bb.hi, 1e-6f);
     ds->boxes[ds->nbox] = bb;
     ds->box_ref[ds->nbox] = ref;
     ds->nbox++;
-    return 0;
 }
 
 static int bands_push(devscene *ds, int v)
@@ -209,16 +213,18 @@ static int polygon_bands(devscene *ds, cw_polygon *pg)
 int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *err, size_t errlen)
 {
     size_t i, nprim = s->spheres.count + s->triangles.count + s->polygons.count + s->cones.count;
-    size_t k;
+    size_t k, nmtri = devinst_triangles(s), ntop = nprim + s->instances.count;
 
     memset(ds, 0, sizeof *ds);
     ds->origin = origin ? *origin : vec3d_make(0, 0, 0);
-    if (nprim > (size_t)1 << 28) {
-        snprintf(err, errlen, "%zu primitives: more than the 2^28 the renderer can address", nprim);
+    if (ntop + nmtri > (size_t)1 << 27) {
+        snprintf(err, errlen,
+                 "%zu primitives and instances: more than the 2^27 the renderer can address",
+                 ntop + nmtri);
         return -1;
     }
     ds->sph = calloc(s->spheres.count + 1, sizeof *ds->sph);
-    ds->tri = calloc(s->triangles.count + 1, sizeof *ds->tri);
+    ds->tri = calloc(s->triangles.count + nmtri + 1, sizeof *ds->tri);
     ds->normals = calloc(s->tri_normals.count + 1, sizeof *ds->normals);
     ds->pg = calloc(s->polygons.count + 1, sizeof *ds->pg);
     ds->verts = calloc(s->poly_verts.count + 1, sizeof *ds->verts);
@@ -226,8 +232,8 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
     ds->cones = calloc(s->cones.count + 1, sizeof *ds->cones);
     ds->lights = calloc(s->lights.count + 1, sizeof *ds->lights);
     ds->mats = calloc(s->materials.count + 1, sizeof *ds->mats);
-    ds->boxes = calloc(nprim + 1, sizeof *ds->boxes);
-    ds->box_ref = calloc(nprim + 1, sizeof *ds->box_ref);
+    ds->boxes = calloc(ntop + 1, sizeof *ds->boxes);
+    ds->box_ref = calloc(ntop + 1, sizeof *ds->box_ref);
     if (!ds->sph || !ds->tri || !ds->normals || !ds->pg || !ds->verts || !ds->cones ||
         !ds->lights || !ds->mats || !ds->boxes || !ds->box_ref) {
         snprintf(err, errlen, "out of memory for a scene of %zu primitives", nprim);
@@ -245,7 +251,7 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
         box_empty(b.lo, b.hi);
         box_add_point(b.lo, b.hi, c.x - rad, c.y - rad, c.z - rad);
         box_add_point(b.lo, b.hi, c.x + rad, c.y + rad, c.z + rad);
-        push_box(ds, &b, CW_REF(CW_PRIM_SPHERE, ds->nsph));
+        devscene_push_box(ds, &b, CW_REF(CW_PRIM_SPHERE, ds->nsph));
         ds->nsph++;
     }
     for (i = 0; i < s->triangles.count; i++) {
@@ -271,7 +277,7 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
         }
         for (k = 0; k < 3; k++)
             box_add_point(b.lo, b.hi, p[k].x, p[k].y, p[k].z);
-        push_box(ds, &b, CW_REF(CW_PRIM_TRIANGLE, ds->ntri));
+        devscene_push_box(ds, &b, CW_REF(CW_PRIM_TRIANGLE, ds->ntri));
         ds->ntri++;
     }
     for (i = 0; i < s->poly_verts.count; i++)
@@ -306,7 +312,7 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
             snprintf(err, errlen, "out of memory for polygon edge bands");
             return -1;
         }
-        push_box(ds, &b, CW_REF(CW_PRIM_POLYGON, ds->npg));
+        devscene_push_box(ds, &b, CW_REF(CW_PRIM_POLYGON, ds->npg));
         ds->npg++;
     }
     for (i = 0; i < s->cones.count; i++) {
@@ -341,9 +347,12 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
         box_empty(b.lo, b.hi);
         box_add_disc(b.lo, b.hi, c0, a, r0);
         box_add_disc(b.lo, b.hi, c1, a, r1);
-        push_box(ds, &b, CW_REF(CW_PRIM_CONE, ds->ncone));
+        devscene_push_box(ds, &b, CW_REF(CW_PRIM_CONE, ds->ncone));
         ds->ncone++;
     }
+    ds->dropped = (int)nprim - ds->nbox; /* before the instances' boxes */
+    if (devinst_convert(s, ds, err, errlen) != 0)
+        return -1;
     for (i = 0; i < s->lights.count; i++) {
         const scene_light *sl = &SCENE_AT(s->lights, scene_light, i);
         ds->lights[i].position = local4(ds, sl->position, 0);
@@ -357,7 +366,6 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
         ds->mats[i].km = devscene_f4(sm->km, 0);
         ds->mats[i].kt = devscene_f4(sm->kt, sm->ior);
     }
-    ds->dropped = (int)nprim - ds->nbox;
     find_materials(s, ds);
     return 0;
 }
@@ -443,13 +451,14 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
                  ds->tree_wide.stack_need, CW_BVH_STACK);
         return -1;
     }
-    ds->refs = malloc(((size_t)ds->tree.num_refs + 1) * sizeof *ds->refs);
+    ds->refs = malloc(((size_t)ds->tree.num_refs + (size_t)ds->nmesh_box + 1) * sizeof *ds->refs);
     if (!ds->refs) {
         snprintf(err, errlen, "out of memory for the BVH");
         return -1;
     }
     for (i = 0; i < ds->tree.num_refs; i++)
         ds->refs[i] = ds->box_ref[ds->tree.refs[i]];
+    ds->nrefs = ds->tree.num_refs;
     /* only the kernels' arrays stay: the binary tree and the box map have served */
     free(ds->box_ref);
     ds->box_ref = NULL;
@@ -457,5 +466,7 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
     free(ds->tree.refs);
     ds->tree.nodes = NULL;
     ds->tree.refs = NULL;
+    if (devinst_build(ds, err, errlen) != 0)
+        return -1;
     return pack_triangle_leaves(ds, err, errlen);
 }

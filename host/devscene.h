@@ -9,9 +9,21 @@
 #include "types.h"
 #include "world.h"
 
+/* A mesh placed by instances, on its way to the kernels (devscene_inst.c): its triangles
+ * (in mesh coordinates less center) are tri[first .. first + count), their boxes
+ * mesh_boxes[box_first ..], and its tree starts at node root of the combined node array. */
+typedef struct {
+    int first, count, box_first;
+    vec3d center; /* the middle of its bounding box: its triangles are stored relative to it */
+    float lo[3], hi[3]; /* bounds of the stored (relative) vertices */
+    int root;           /* -1 until its tree is built; also -1 for a mesh with no triangle left */
+} devscene_mesh;
+
 /* The device arrays of a scene, and the BVH over all its primitives. Degenerate
  * primitives (no surface) are left out, the others keep their order within their kind:
- * a hit's index is an index into these arrays. */
+ * a hit's index is an index into these arrays. A mesh placed two or more times (scene_mesh.h)
+ * keeps one copy of its triangles, after the world's, and its own tree, after the top
+ * level's nodes; each placement is a cw_instance whose box is in the top level. */
 typedef struct {
     cw_sphere *sph;
     cw_triangle *tri;
@@ -24,8 +36,16 @@ typedef struct {
     cw_material *mats;
     bvh_box *boxes; /* until the BVH is built */
     int *box_ref;   /* box i bounds primitive box_ref[i] (a CW_REF); until the BVH is built */
-    int *refs;      /* BVH leaf entries as CW_REFs */
-    int *bands;     /* edge bands of large polygons (cw_polygon) */
+    int *refs;      /* BVH leaf entries as CW_REFs: the top level's, then each mesh's */
+    int nrefs;
+    cw_instance *inst;
+    int ninst;
+    devscene_mesh *meshes; /* indexed like scene.meshes; only those placed are filled */
+    int nmesh;
+    bvh_box *mesh_boxes; /* the mesh triangles' boxes; until the BVH is built */
+    int *mesh_box_ref;   /* their CW_REFs */
+    int nmesh_box;
+    int *bands; /* edge bands of large polygons (cw_polygon) */
     size_t nbands, bands_cap;
     int nsph, ntri, nnorm, npg, nverts, ncone, nbox, nblocks;
     bvh tree; /* the binary tree: after devscene_build_bvh only its counts and depth */
@@ -70,5 +90,18 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen);
 
 void devscene_free(devscene *ds);
+
+/* For devscene_inst.c: adds a primitive's box (widened against rounding) for the top level. */
+void devscene_push_box(devscene *ds, const bvh_box *b, int ref);
+
+/* devscene_inst.c: the meshes placed by instances (their triangles after the world's, and
+ * their boxes) and the instances (cw_instance and their boxes in the top level); called by
+ * devscene_convert once the world's triangles are in. Returns 0, or -1 with err. */
+int devinst_convert(const scene *s, devscene *ds, char *err, size_t errlen);
+/* The number of mesh triangles devinst_convert may add (those of placed meshes). */
+size_t devinst_triangles(const scene *s);
+/* Builds each placed mesh's tree and appends it to the top level's (nodes and refs),
+ * setting the instances' roots. Called by devscene_build_bvh. Returns 0, or -1 with err. */
+int devinst_build(devscene *ds, char *err, size_t errlen);
 
 #endif

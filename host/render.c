@@ -299,6 +299,7 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     r->features.triangles = ds.ntri;
     r->features.polygons = ds.npg;
     r->features.cones = ds.ncone;
+    r->features.instances = ds.ninst;
     r->features.mirrors = ds.mirrors;
     r->features.transmitters = ds.transmitters;
     t0 = sys_now();

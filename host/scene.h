@@ -144,7 +144,8 @@ long scene_push(scene_array *a, const void *elem, size_t elem_size);
 long scene_push_triangle(scene *s, const vec3d p[3], const vec3f *n, int material);
 
 /* The same for a triangle of a mesh, in mesh coordinates (scene.mesh_tris); the caller
- * then sets the mesh's count. */
+ * then sets the mesh's count. Every triangle owns its three normals (never shared):
+ * scene_flatten_instances transforms them in place. */
 long scene_push_mesh_triangle(scene *s, const vec3d p[3], const vec3f *n, int material);
 
 /* The three vertex normals of triangle t, or NULL when it is flat. */

@@ -380,6 +380,12 @@ int pov_write_scene(const scene *s, FILE *f, char *err, size_t errlen)
 
     if (check_scene(s, err, errlen) != 0)
         return -1;
+    if (s->instances.count > 0) {
+        snprintf(err, errlen,
+                 "the scene still places meshes: flatten its instances first "
+                 "(scene_flatten_instances)");
+        return -1;
+    }
     pov_command_line(s, "SCENE.pov", "SCENE.png", cmd, sizeof cmd);
     fprintf(f,
             "// clwhitted scene \"%s\" as POV-Ray 3.7 scene description (written by scene2pov).\n"

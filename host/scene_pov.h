@@ -29,7 +29,7 @@
  * as well (a comment in the file counts them). Transmission is written as POV-Ray's
  * transmit and interior ior, whose model differs (see write_simple in scene_pov.c).
  * Returns 0, or -1 with a message in err (invalid material index, non-finite values,
- * a write error). */
+ * a write error, instances left: flatten them first, scene_flatten_instances). */
 int pov_write_scene(const scene *s, FILE *f, char *err, size_t errlen);
 
 /* Writes the povray command line that renders pov_path to out_path (a .png) at the

@@ -2,6 +2,7 @@
 #include "viewcam.h"
 
 #include "scene_geom.h"
+#include "scene_mesh.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -77,6 +78,13 @@ static int scene_bounds(const scene *s, vec3d *centre, float *diag)
             grow(&lo, &hi, SCENE_AT(s->triangles, scene_triangle, i).p[k], 0.0f, &any);
     for (i = 0; i < s->poly_verts.count; i++)
         grow(&lo, &hi, SCENE_AT(s->poly_verts, vec3d, i), 0.0f, &any);
+    for (i = 0; i < s->instances.count; i++) {
+        double blo[3], bhi[3];
+        if (scene_instance_bounds(s, i, blo, bhi) == 0) {
+            grow(&lo, &hi, vec3d_make(blo[0], blo[1], blo[2]), 0.0f, &any);
+            grow(&lo, &hi, vec3d_make(bhi[0], bhi[1], bhi[2]), 0.0f, &any);
+        }
+    }
     for (i = 0; i < s->cones.count; i++) {
         const scene_cone *cn = &SCENE_AT(s->cones, scene_cone, i);
         grow(&lo, &hi, cn->base, fabsf(cn->base_radius), &any);

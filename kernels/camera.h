@@ -40,7 +40,7 @@ CW_INLINE cw_ray cam_ray(CW_GLOBAL const cw_frame *f, int i, int j, float sx, fl
     ray.pixel = (f->ny - 1 - j) * f->nx + i;
     ray.depth = 1;
     ray.skip = 0;
-    ray.pad0 = 0;
+    ray.skip_inst = 0;
     return ray;
 }
 

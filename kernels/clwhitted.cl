@@ -76,7 +76,7 @@ __kernel void cw_intersect(CW_WORLD_ARGS, __global const cw_ray *rays, __global 
         return;
     ray = rays[gid];
     CW_MAKE_WORLD(w);
-    bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, CW_FAR, ray.skip, &hit);
+    bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, CW_FAR, ray.skip, ray.skip_inst, &hit);
     hits[gid] = hit;
 #if CW_STATS
     if (hit.kind != CW_PRIM_NONE)
@@ -116,7 +116,7 @@ __kernel void cw_occlude(CW_WORLD_ARGS, __global const cw_shadow_ray *shadows,
     CW_MAKE_WORLD(w);
     for (i = gid; i < gid + block && i < n; i++) {
         cw_shadow_ray sr = shadows[i];
-        if (bvh_any(&w, sr.origin.xyz, sr.dir.xyz, 0.0f, sr.origin.w, sr.skip)) {
+        if (bvh_any(&w, sr.origin.xyz, sr.dir.xyz, 0.0f, sr.origin.w, sr.skip, sr.skip_inst)) {
 #if CW_STATS
             atomic_inc(&counters[CW_COUNT_BLOCKED]);
 #endif

@@ -17,6 +17,10 @@
 #ifndef CW_HAS_CONES
 #define CW_HAS_CONES 1
 #endif
+/* placed meshes: the two-level BVH (instance.h) */
+#ifndef CW_HAS_INSTANCES
+#define CW_HAS_INSTANCES 1
+#endif
 #ifndef CW_HAS_MIRRORS
 #define CW_HAS_MIRRORS 1
 #endif
@@ -39,10 +43,13 @@
 #define CW_PIXEL 0
 #endif
 
-#if (CW_HAS_SPHERES | CW_HAS_TRIANGLES | CW_HAS_POLYGONS | CW_HAS_CONES | CW_HAS_MIRRORS |         \
-     CW_HAS_REFRACTION | CW_FAST | CW_STATS | CW_PIXEL) &                                          \
+#if (CW_HAS_SPHERES | CW_HAS_TRIANGLES | CW_HAS_POLYGONS | CW_HAS_CONES | CW_HAS_INSTANCES |       \
+     CW_HAS_MIRRORS | CW_HAS_REFRACTION | CW_FAST | CW_STATS | CW_PIXEL) &                         \
     ~1
 #error "feature flags CW_HAS_*, CW_FAST, CW_STATS and CW_PIXEL must be 0 or 1"
+#endif
+#if CW_HAS_INSTANCES && !CW_HAS_TRIANGLES
+#error "instances place meshes of triangles: CW_HAS_INSTANCES needs CW_HAS_TRIANGLES"
 #endif
 #if !CW_FAST && defined(__FAST_RELAXED_MATH__)
 #error "the robust path (CW_FAST=0) must not be built with -cl-fast-relaxed-math"

@@ -34,10 +34,11 @@
 #endif
 
 /* A pending ray: origin, unit direction, weight (the product of the mirror and
- * transmission colours on its path), depth (the eye ray is 1) and skip (as in cw_ray). */
+ * transmission colours on its path), depth (the eye ray is 1), skip and skip_inst (as in
+ * cw_ray). */
 typedef struct {
     vec3 o, d, weight;
-    int depth, skip;
+    int depth, skip, skip_inst;
 } pix_ray;
 
 /* What one pixel sample counted, indexed by CW_COUNT_*: secondary rays (CW_COUNT_RAYS),
@@ -71,7 +72,7 @@ CW_INLINE void pix_sum(pix_counts *sum, pix_counts c)
         sum->n[CW_COUNT_DEPTH] = c.n[CW_COUNT_DEPTH];
 }
 
-CW_INLINE pix_ray pix_make(vec3 o, vec3 d, vec3 weight, int depth, int skip)
+CW_INLINE pix_ray pix_make(vec3 o, vec3 d, vec3 weight, int depth, int skip, int skip_inst)
 {
     pix_ray r;
     r.o = o;
@@ -79,6 +80,7 @@ CW_INLINE pix_ray pix_make(vec3 o, vec3 d, vec3 weight, int depth, int skip)
     r.weight = weight;
     r.depth = depth;
     r.skip = skip;
+    r.skip_inst = skip_inst;
     return r;
 }
 
@@ -98,7 +100,7 @@ CW_INLINE void pix_step(const cw_world *w, CW_GLOBAL const cw_frame *f,
     nx->refract = nx->reflect = 0;
     if (ray->depth > c->n[CW_COUNT_DEPTH])
         c->n[CW_COUNT_DEPTH] = ray->depth;
-    bvh_closest(w, ray->o, ray->d, 0.0f, CW_FAR, ray->skip, &hit);
+    bvh_closest(w, ray->o, ray->d, 0.0f, CW_FAR, ray->skip, ray->skip_inst, &hit);
     if (hit.kind == CW_PRIM_NONE) {
         *acc = v3_add(*acc, shade_background(f, ray->weight));
         return;
@@ -115,7 +117,7 @@ CW_INLINE void pix_step(const cw_world *w, CW_GLOBAL const cw_frame *f,
             continue;
         c->n[CW_COUNT_SHADOWS]++;
         tmax = shade_shadow_ray(&pt, lp, &o, &l);
-        if (bvh_any(w, o, l, 0.0f, tmax, pt.s.flat)) {
+        if (bvh_any(w, o, l, 0.0f, tmax, pt.s.flat, pt.s.inst)) {
 #if CW_STATS
             c->n[CW_COUNT_BLOCKED]++;
 #endif
@@ -147,9 +149,11 @@ CW_INLINE void pix_subtree(const cw_world *w, CW_GLOBAL const cw_frame *f,
         pix_step(w, f, lights, materials, &ray, acc, &sum, &nx, c);
         *acc = v3_add(*acc, sum);
         if (nx.reflect)
-            stack[sp++] = pix_make(nx.r_o, nx.r_d, nx.r_weight, ray.depth + 1, nx.skip);
+            stack[sp++] =
+                pix_make(nx.r_o, nx.r_d, nx.r_weight, ray.depth + 1, nx.skip, nx.skip_inst);
         if (nx.refract)
-            stack[sp++] = pix_make(nx.t_o, nx.t_d, nx.t_weight, ray.depth + 1, nx.skip);
+            stack[sp++] =
+                pix_make(nx.t_o, nx.t_d, nx.t_weight, ray.depth + 1, nx.skip, nx.skip_inst);
     }
 }
 #endif
@@ -194,7 +198,7 @@ CW_INLINE pix_counts pix_trace(const cw_world *w, CW_GLOBAL const cw_frame *f,
     int head = 0, count = 1, k;
 
     pix_clear(&c);
-    queue[0] = pix_make(v3_from4(eye.origin), v3_from4(eye.dir), v3_from4(eye.weight), 1, 0);
+    queue[0] = pix_make(v3_from4(eye.origin), v3_from4(eye.dir), v3_from4(eye.weight), 1, 0, 0);
     while (count > 0) { /* one level: the rays queued now */
         int n = count;
         for (k = 0; k < n; k++) {
@@ -204,13 +208,15 @@ CW_INLINE pix_counts pix_trace(const cw_world *w, CW_GLOBAL const cw_frame *f,
             count--;
             pix_step(w, f, lights, materials, &ray, &acc, &sums[k], &nx, &c);
             if (nx.refract)
-                pix_enqueue(w, f, lights, materials, queue, head, &count,
-                            pix_make(nx.t_o, nx.t_d, nx.t_weight, ray.depth + 1, nx.skip), &acc,
-                            &c);
+                pix_enqueue(
+                    w, f, lights, materials, queue, head, &count,
+                    pix_make(nx.t_o, nx.t_d, nx.t_weight, ray.depth + 1, nx.skip, nx.skip_inst),
+                    &acc, &c);
             if (nx.reflect)
-                pix_enqueue(w, f, lights, materials, queue, head, &count,
-                            pix_make(nx.r_o, nx.r_d, nx.r_weight, ray.depth + 1, nx.skip), &acc,
-                            &c);
+                pix_enqueue(
+                    w, f, lights, materials, queue, head, &count,
+                    pix_make(nx.r_o, nx.r_d, nx.r_weight, ray.depth + 1, nx.skip, nx.skip_inst),
+                    &acc, &c);
         }
         for (k = 0; k < n; k++)
             acc = v3_add(acc, sums[k]);

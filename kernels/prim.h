@@ -6,6 +6,7 @@
 
 #include "cone.h"
 #include "flags.h"
+#include "instance.h"
 #include "isect.h"
 #include "polygon.h"
 #include "sphere.h"
@@ -56,6 +57,7 @@ CW_FORCE_INLINE void prim_intersect(const cw_world *w, int ref, const cw_rayinfo
         hit->v = v;
         hit->kind = kind;
         hit->index = index;
+        hit->inst = 0; /* the world's, until an instance's walk marks it (traverse.h) */
     }
 }
 
@@ -76,6 +78,7 @@ CW_FORCE_INLINE void prim_tri4(const cw_world *w, int block, const cw_rayinfo *r
         hit->v = v;
         hit->kind = CW_PRIM_TRIANGLE;
         hit->index = b->index[lane];
+        hit->inst = 0;
     }
 }
 #endif
@@ -94,6 +97,12 @@ CW_INLINE cw_surface prim_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d)
 #endif
 #if CW_HAS_TRIANGLES
     case CW_PRIM_TRIANGLE:
+#if CW_HAS_INSTANCES
+        if (hit.inst != 0) {
+            s = surface_instance(w, hit, o, d);
+            break;
+        }
+#endif
         s = surface_triangle(w, hit, p);
         break;
 #endif
@@ -118,6 +127,7 @@ CW_INLINE cw_surface prim_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d)
 #if CW_FAST
     s.err = v3(0.0f, 0.0f, 0.0f);
 #endif
+    s.inst = hit.inst;
     return s;
 }
 

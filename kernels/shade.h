@@ -131,7 +131,7 @@ CW_INLINE vec3 shade_light(const shade_point *sp, vec3 l, vec3 intensity)
  * in its unit direction with its weight, and never hits the primitive it leaves (skip). */
 typedef struct {
     int refract, reflect;    /* 0 or 1 each */
-    int skip;                /* as in cw_ray: the surface's flat */
+    int skip, skip_inst;     /* as in cw_ray: the surface's flat and inst */
     vec3 t_o, t_d, t_weight; /* the refraction ray */
     vec3 r_o, r_d, r_weight; /* the mirror ray */
 } shade_next;
@@ -142,6 +142,7 @@ CW_INLINE shade_next shade_secondary(const shade_point *sp, int spd_rays)
     shade_next nx;
     nx.refract = nx.reflect = 0;
     nx.skip = sp->s.flat;
+    nx.skip_inst = sp->s.inst;
 #if CW_HAS_MIRRORS || CW_HAS_REFRACTION
     {
         vec3 km = v3_from4(sp->m->km), refl_weight = km;

@@ -18,6 +18,7 @@ typedef struct {
     vec3 p, ng, ns, err;
     int flat;     /* 1 + reference of the primitive if it is flat (triangle, polygon), else 0
                    * (the fast path: 0) */
+    int inst;     /* 1 + the instance of a mesh triangle (cw_hit.inst); 0: the world's */
     int material; /* index into the material array */
 } cw_surface;
 

@@ -8,6 +8,7 @@
 #define CW_TRAVERSE_H
 
 #include "flags.h"
+#include "instance.h"
 #include "isect.h"
 #include "prim.h"
 #include "types.h"
@@ -39,14 +40,151 @@ CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo 
     return vl_le_mask(te, tx);
 }
 
-/* Closest hit in (tmin, tmax), never the primitive skip - 1 (skip = 0: none), written to
- * *out. Leaf children are tested as they are found (in lane order); interior children are
- * visited nearest first, the others stacked with their entry distance and skipped when a
- * closer hit has been found by the time they come off the stack. (*out is private memory:
- * the hit is written through a pointer rather than returned, for Oclgrind; see
- * docs/portability.md.) */
+/* Inserts child c, entered at distance e, into the n children ci/ct sorted nearest first. */
+CW_INLINE void bvh_insert(int *ci, float *ct, int n, int c, float e)
+{
+    int j = n;
+    while (j > 0 && ct[j - 1] > e) {
+        ct[j] = ct[j - 1];
+        ci[j] = ci[j - 1];
+        j--;
+    }
+    ct[j] = e;
+    ci[j] = c;
+}
+
+/* After a node of a closest-hit walk: stacks its n interior children ci/ct but the nearest
+ * (farthest deepest) and returns the nearest, or when it is beyond t_best, the next stacked
+ * node still entered before t_best; -1 when the stack runs out. */
+CW_INLINE int bvh_next(int *stack, float *stack_t, int *sp, const int *ci, const float *ct, int n,
+                       float t_best)
+{
+    int i;
+    for (i = n - 1; i >= 1; i--) {
+        if (ct[i] <= t_best) {
+            stack[*sp] = ci[i];
+            stack_t[*sp] = ct[i];
+            (*sp)++;
+        }
+    }
+    if (n > 0 && ct[0] <= t_best)
+        return ci[0];
+    for (;;) {
+        if (*sp == 0)
+            return -1;
+        (*sp)--;
+        if (stack_t[*sp] <= t_best)
+            return stack[*sp];
+    }
+}
+
+#if CW_HAS_INSTANCES
+/* Closest hit in a mesh's own tree from node root, for the ray ri in mesh coordinates:
+ * its leaves hold triangles only (blocks of four, or single references). On a hit closer
+ * than *t_best, records it in *hit and lowers *t_best. skip: as in bvh_closest, within
+ * this mesh. The walk of bvh_closest, without instances. */
+CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *ri, float tmin,
+                                int skip, float *t_best, cw_hit *hit)
+{
+    int stack[CW_BVH_STACK];
+    float stack_t[CW_BVH_STACK];
+    int sp = 0, node = root, i, k;
+    for (;;) {
+        CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[node];
+        int ci[CW_BVH_WIDTH], n = 0;
+        float ct[CW_BVH_WIDTH], enter[CW_BVH_WIDTH];
+        unsigned mask = bvh_boxes(nd, ri, tmin, *t_best, enter);
+        while (mask != 0u) {
+            int count;
+            i = cw_ctz(mask);
+            mask &= mask - 1u;
+            count = nd->count[i];
+            if (count > 0) {
+                for (k = nd->child[i]; k < nd->child[i] + count; k++) {
+                    int ref = w->refs[k];
+                    if (ref + 1 != skip)
+                        prim_intersect(w, ref, ri, tmin, t_best, hit);
+                }
+            } else if (count < -1) {
+                for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++)
+                    prim_tri4(w, k, ri, tmin, skip, t_best, hit);
+            } else if (count == 0) {
+                bvh_insert(ci, ct, n++, nd->child[i], enter[i]);
+            }
+        }
+        node = bvh_next(stack, stack_t, &sp, ci, ct, n, *t_best);
+        if (node < 0)
+            return;
+    }
+}
+
+/* Any hit in (tmin, tmax) in a mesh's own tree from node root (ri in mesh coordinates),
+ * never the triangle skip - 1 of this mesh. */
+CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, float tmin,
+                           float tmax, int skip)
+{
+    int stack[CW_BVH_STACK];
+    int sp = 0, i, k;
+    cw_hit hit;
+    float t_lim;
+    stack[sp++] = root;
+    while (sp > 0) {
+        CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[stack[--sp]];
+        float enter[CW_BVH_WIDTH];
+        unsigned mask = bvh_boxes(nd, ri, tmin, tmax, enter);
+        while (mask != 0u) {
+            int count;
+            i = cw_ctz(mask);
+            mask &= mask - 1u;
+            count = nd->count[i];
+            if (count == 0) {
+                stack[sp++] = nd->child[i];
+                continue;
+            }
+            for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++) {
+                t_lim = tmax;
+                hit.kind = CW_PRIM_NONE;
+                prim_tri4(w, k, ri, tmin, skip, &t_lim, &hit);
+                if (hit.kind != CW_PRIM_NONE)
+                    return 1;
+            }
+            for (k = nd->child[i]; k < nd->child[i] + count; k++) {
+                int ref = w->refs[k];
+                if (ref + 1 == skip)
+                    continue;
+                t_lim = tmax;
+                hit.kind = CW_PRIM_NONE;
+                prim_intersect(w, ref, ri, tmin, &t_lim, &hit);
+                if (hit.kind != CW_PRIM_NONE)
+                    return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* The closest hit in instance k's mesh (see bvh_mesh_closest), marked with its instance. */
+CW_INLINE void bvh_instance_closest(const cw_world *w, int k, vec3 o, vec3 d, float tmin, int skip,
+                                    float *t_best, cw_hit *hit)
+{
+    CW_GLOBAL const cw_instance *in = &w->instances[k];
+    cw_rayinfo mri = inst_ray(in, o, d);
+    float before = *t_best;
+    bvh_mesh_closest(w, in->root, &mri, tmin, skip, t_best, hit);
+    if (*t_best < before)
+        hit->inst = k + 1;
+}
+#endif
+
+/* Closest hit in (tmin, tmax), never the primitive skip - 1 (skip = 0: none) of instance
+ * skip_inst - 1 (skip_inst = 0: of the world), written to *out. Leaf children are tested as
+ * they are found (in lane order); interior children are visited nearest first, the others
+ * stacked with their entry distance and skipped when a closer hit has been found by the
+ * time they come off the stack. An instance's leaf entry walks its mesh's tree at once
+ * (bvh_instance_closest). (*out is private memory: the hit is written through a pointer
+ * rather than returned, for Oclgrind; see docs/portability.md.) */
 CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax, int skip,
-                           cw_hit *out)
+                           int skip_inst, cw_hit *out)
 {
     cw_hit hit;
     cw_rayinfo ri = isect_rayinfo(o, d);
@@ -54,13 +192,14 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
     float stack_t[CW_BVH_STACK];
     int sp = 0, node = 0, i, k;
     float t_best = tmax;
+    int wskip = skip_inst != 0 ? 0 : skip; /* what the world's own primitives skip */
 
     hit.t = tmax;
     hit.u = 0.0f;
     hit.v = 0.0f;
     hit.kind = CW_PRIM_NONE;
     hit.index = -1;
-    hit.pad0 = hit.pad1 = hit.pad2 = 0;
+    hit.inst = hit.pad1 = hit.pad2 = 0;
     if (w->num_nodes == 0) {
         *out = hit;
         return;
@@ -80,59 +219,46 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
             if (count > 0) {
                 for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                     int ref = w->refs[k];
-                    if (ref + 1 != skip)
+#if CW_HAS_INSTANCES
+                    if (CW_REF_KIND(ref) == CW_PRIM_INSTANCE) {
+                        int in = CW_REF_INDEX(ref);
+                        bvh_instance_closest(w, in, o, d, tmin, in + 1 == skip_inst ? skip : 0,
+                                             &t_best, &hit);
+                        continue;
+                    }
+#endif
+                    if (ref + 1 != wskip)
                         prim_intersect(w, ref, &ri, tmin, &t_best, &hit);
                 }
 #if CW_HAS_TRIANGLES
             } else if (count < -1) { /* blocks of four triangles */
                 for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++)
-                    prim_tri4(w, k, &ri, tmin, skip, &t_best, &hit);
+                    prim_tri4(w, k, &ri, tmin, wskip, &t_best, &hit);
 #endif
             } else if (count == 0) {
-                /* insertion by entry distance, nearest first */
-                int j = n++;
-                while (j > 0 && ct[j - 1] > e) {
-                    ct[j] = ct[j - 1];
-                    ci[j] = ci[j - 1];
-                    j--;
-                }
-                ct[j] = e;
-                ci[j] = nd->child[i];
+                bvh_insert(ci, ct, n++, nd->child[i], e);
             }
         }
         /* stack the farther ones (farthest deepest), go down the nearest */
-        for (i = n - 1; i >= 1; i--) {
-            if (ct[i] <= t_best) {
-                stack[sp] = ci[i];
-                stack_t[sp] = ct[i];
-                sp++;
-            }
+        node = bvh_next(stack, stack_t, &sp, ci, ct, n, t_best);
+        if (node < 0) {
+            *out = hit;
+            return;
         }
-        if (n > 0 && ct[0] <= t_best) {
-            node = ci[0];
-            continue;
-        }
-        for (;;) {
-            if (sp == 0) {
-                *out = hit;
-                return;
-            }
-            sp--;
-            if (stack_t[sp] <= t_best)
-                break;
-        }
-        node = stack[sp];
     }
 }
 
-/* Any hit in (tmin, tmax), never the primitive skip - 1: for shadow rays. */
-CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax, int skip)
+/* Any hit in (tmin, tmax), never the primitive skip - 1 of instance skip_inst - 1 (as in
+ * bvh_closest): for shadow rays. */
+CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax, int skip,
+                      int skip_inst)
 {
     cw_rayinfo ri = isect_rayinfo(o, d);
     int stack[CW_BVH_STACK];
     int sp = 0, node, i, k;
     cw_hit hit;
     float t_lim;
+    int wskip = skip_inst != 0 ? 0 : skip;
 
     if (w->num_nodes == 0)
         return 0;
@@ -157,14 +283,24 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
             for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++) {
                 t_lim = tmax;
                 hit.kind = CW_PRIM_NONE;
-                prim_tri4(w, k, &ri, tmin, skip, &t_lim, &hit);
+                prim_tri4(w, k, &ri, tmin, wskip, &t_lim, &hit);
                 if (hit.kind != CW_PRIM_NONE)
                     return 1;
             }
 #endif
             for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                 int ref = w->refs[k];
-                if (ref + 1 == skip)
+#if CW_HAS_INSTANCES
+                if (CW_REF_KIND(ref) == CW_PRIM_INSTANCE) {
+                    int in = CW_REF_INDEX(ref);
+                    cw_rayinfo mri = inst_ray(&w->instances[in], o, d);
+                    if (bvh_mesh_any(w, w->instances[in].root, &mri, tmin, tmax,
+                                     in + 1 == skip_inst ? skip : 0))
+                        return 1;
+                    continue;
+                }
+#endif
+                if (ref + 1 == wskip)
                     continue;
                 t_lim = tmax;
                 hit.kind = CW_PRIM_NONE;

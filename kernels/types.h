@@ -6,17 +6,20 @@
 
 #include "compat.h"
 
-/* primitive kinds, as stored in cw_hit.kind and in the low two bits of a primitive
- * reference (ref = index * 4 + kind - 1; a fifth kind needs a third bit). Each kind's
- * intersection and surface code is in its own header (sphere.h ...), dispatched by prim.h. */
+/* primitive kinds, as stored in cw_hit.kind and in the low three bits of a primitive
+ * reference (ref = index * 8 + kind - 1). Each kind's intersection and surface code is in
+ * its own header (sphere.h ...), dispatched by prim.h. An instance (a placed mesh, only in
+ * the top level of the BVH) is not a primitive: its leaf entry sends the traversal into
+ * its mesh's own tree (traverse.h, instance.h). */
 #define CW_PRIM_NONE 0
 #define CW_PRIM_SPHERE 1
 #define CW_PRIM_TRIANGLE 2
 #define CW_PRIM_POLYGON 3
 #define CW_PRIM_CONE 4
-#define CW_REF(kind, index) ((index)*4 + (kind)-1)
-#define CW_REF_KIND(ref) (((ref)&3) + 1)
-#define CW_REF_INDEX(ref) ((ref) >> 2)
+#define CW_PRIM_INSTANCE 5
+#define CW_REF(kind, index) ((index)*8 + (kind)-1)
+#define CW_REF_KIND(ref) (((ref)&7) + 1)
+#define CW_REF_INDEX(ref) ((ref) >> 3)
 
 /* camera projections, as stored in cw_frame.projection */
 #define CW_PROJ_PERSPECTIVE 0
@@ -108,6 +111,19 @@ typedef struct {
                               * child then the first block; interior: 0; empty: -1 */
 } cw_bvhw_node;
 
+/* A mesh placed in the world (a two-level BVH: the top level's leaf entry
+ * CW_REF(CW_PRIM_INSTANCE, i) leads into the mesh's own tree at node root, whose
+ * triangles are in mesh coordinates). Rows of 3x4 affine matrices, xyz the linear part and
+ * w the translation; world coordinates are relative to the local origin, as everywhere. */
+typedef struct {
+    cw_float4 to_mesh[3];  /* world to mesh: rays go into the mesh's tree with it */
+    cw_float4 to_world[3]; /* mesh to world: the hit point; normals by the transpose of
+                            * to_mesh's linear part */
+    int root;              /* the mesh's root node in the node array */
+    int material;          /* >= 0: every triangle takes this material; -1: its own */
+    int pad0, pad1;
+} cw_instance;
+
 typedef struct {
     cw_float4 ka; /* rgb ambient, w: Phong exponent p */
     cw_float4 kd; /* rgb diffuse */
@@ -150,7 +166,8 @@ typedef struct {
     int depth;        /* 1 for eye rays */
     int skip;         /* 1 + reference of the flat primitive the ray leaves (never hit
                        * again); 0: none */
-    int pad0;
+    int skip_inst;    /* 1 + the instance that primitive belongs to (a mesh triangle);
+                       * 0: a primitive of the world */
 } cw_ray;
 
 /* A shadow ray: if nothing blocks origin + t dir for 0 < t < origin.w, color is added to
@@ -160,10 +177,10 @@ typedef struct {
     cw_float4 dir;    /* xyz, unit length */
     cw_float4 color;  /* rgb: the light's contribution if unblocked */
     int pixel;
-    int skip;  /* as in cw_ray */
-    int block; /* the first of a shading point's shadow rays: how many there are (they are
-                * consecutive); the others: 0 */
-    int pad0;
+    int skip;      /* as in cw_ray */
+    int block;     /* the first of a shading point's shadow rays: how many there are (they are
+                    * consecutive); the others: 0 */
+    int skip_inst; /* as in cw_ray */
 } cw_shadow_ray;
 
 /* Queue and statistics counters, one int each. */
@@ -180,7 +197,8 @@ typedef struct {
     float u, v; /* barycentric coordinates (triangles) */
     int kind;   /* CW_PRIM_*; CW_PRIM_NONE for a miss */
     int index;  /* index into the array of that kind */
-    int pad0, pad1, pad2;
+    int inst;   /* 1 + the instance whose mesh the hit triangle is in; 0: the world's */
+    int pad1, pad2;
 } cw_hit;
 
 #endif

@@ -37,7 +37,7 @@ CW_INLINE void wave_add_local(CW_GLOBAL float *image, int pixel, vec3 c)
 }
 
 CW_INLINE void wave_put_ray(CW_GLOBAL cw_ray *out, int slot, vec3 o, vec3 d, vec3 weight,
-                            const cw_ray *parent, int skip)
+                            const cw_ray *parent, int skip, int skip_inst)
 {
     cw_ray r;
     r.origin = v4_from3(o, 0.0f);
@@ -46,7 +46,7 @@ CW_INLINE void wave_put_ray(CW_GLOBAL cw_ray *out, int slot, vec3 o, vec3 d, vec
     r.pixel = parent->pixel;
     r.depth = parent->depth + 1;
     r.skip = skip;
-    r.pad0 = 0;
+    r.skip_inst = skip_inst;
     out[slot] = r;
 }
 
@@ -92,7 +92,7 @@ CW_INLINE void wave_shade(const cw_world *w, CW_GLOBAL const cw_frame *f,
         sr.pixel = ray->pixel;
         sr.skip = sp.s.flat;
         sr.block = first ? count : 0;
-        sr.pad0 = 0;
+        sr.skip_inst = sp.s.inst;
         first = 0;
         shadows[slot++] = sr;
     }
@@ -103,9 +103,9 @@ CW_INLINE void wave_shade(const cw_world *w, CW_GLOBAL const cw_frame *f,
     if (nx.refract + nx.reflect > 0) {
         slot = cw_atomic_add_int(&counters[CW_COUNT_RAYS], nx.refract + nx.reflect);
         if (nx.refract)
-            wave_put_ray(out, slot++, nx.t_o, nx.t_d, nx.t_weight, ray, nx.skip);
+            wave_put_ray(out, slot++, nx.t_o, nx.t_d, nx.t_weight, ray, nx.skip, nx.skip_inst);
         if (nx.reflect)
-            wave_put_ray(out, slot, nx.r_o, nx.r_d, nx.r_weight, ray, nx.skip);
+            wave_put_ray(out, slot, nx.r_o, nx.r_d, nx.r_weight, ray, nx.skip, nx.skip_inst);
     }
 }
 

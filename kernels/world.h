@@ -20,7 +20,8 @@
     X(cw_polygon, polygons, "polygons")                                                            \
     X(cw_float4, poly_verts, "polygon vertices")                                                   \
     X(int, poly_bands, "polygon edge bands") /* of large polygons (cw_polygon) */                  \
-    X(cw_cone, cones, "cones")
+    X(cw_cone, cones, "cones")                                                                     \
+    X(cw_instance, instances, "instances") /* placed meshes (two-level BVH) */
 
 /* The scene as the kernels see it. */
 typedef struct {

@@ -10,6 +10,7 @@
 #include "config.h"
 #include "scene.h"
 #include "scene_load.h"
+#include "scene_mesh.h"
 #include "scene_pov.h"
 #include "sys.h"
 
@@ -104,7 +105,8 @@ int main(int argc, char **argv)
 
     scene_init(&s);
     if (scene_load(args[0], &s, err, sizeof err) != 0 ||
-        scene_finish(&s, width, height, depth, err, sizeof err) != 0) {
+        scene_finish(&s, width, height, depth, err, sizeof err) != 0 ||
+        scene_flatten_instances(&s, 1, err, sizeof err) != 0) { /* POV-Ray gets copies */
         fprintf(stderr, "scene2pov: %s\n", err);
         goto out;
     }
