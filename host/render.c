@@ -306,6 +306,15 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     if (devscene_build_bvh(&ds, err, errlen) != 0)
         goto out_free;
     r->stats.build_s = sys_now() - t0;
+    r->stats.spheres = ds.nsph;
+    r->stats.triangles = ds.ntri;
+    r->stats.polygons = ds.npg;
+    r->stats.cones = ds.ncone;
+    r->stats.instances = ds.ninst;
+    r->stats.meshes = 0;
+    for (int m = 0; m < ds.nmesh; m++)
+        r->stats.meshes += ds.meshes[m].root >= 0;
+    r->stats.nodes = ds.tree_wide.num_nodes;
 
     fill_view(f, s, r->origin);
     f->num_lights = (int)s->lights.count;

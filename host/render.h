@@ -88,6 +88,10 @@ typedef struct {
     /* with settings.stats only (the host then waits for each kernel): time in each kernel,
      * the wavefront's four or the per-pixel kernel */
     double raygen_s, intersect_s, shade_s, occlude_s, pixel_s;
+    /* what the last renderer_set_scene uploaded: primitives (degenerate ones left out;
+     * triangles counts a placed mesh's once), instances and the meshes they place, the
+     * BVH's nodes (both levels) */
+    int spheres, triangles, polygons, cones, instances, meshes, nodes;
 } render_stats;
 void renderer_get_stats(const renderer *r, render_stats *st);
 

@@ -239,6 +239,7 @@ check_true "summary fits 80 columns" test "$(sed "s|$T/||" "$T/out" | wc -L)" -l
 "$BIN" --stats -W 16 -H 12 -o "$T/stats.png" scenes/default.json >"$T/out" 2>"$T/err"
 check "--stats render" 0 $?
 check_grep "--stats: device" "^device: .*, [0-9]* compute units\{0,1\}, \(pixel\|wavefront\) kernel; image 16x12, depth [0-9]*$" "$T/out"
+check_grep "--stats: what the scene uploaded" "^scene: 5 spheres, 1 triangle, 2 polygons, 0 cones; 0 instances of 0 meshes; BVH [0-9]* nodes$" "$T/out"
 check_grep "--stats: phase times" "^time: parse [0-9.]* s, build [0-9.]* s, compile [0-9.]* s, upload [0-9.]* s, trace [0-9.]* s ([0-9]* passes), first launch [0-9.]* s$" "$T/out"
 check_grep "--stats: fixed costs" "^fixed: opencl [0-9.]* s (beside the parse), write [0-9.]* s$" "$T/out"
 check_true "no progress bar when stderr is a file" test ! -s "$T/err"
