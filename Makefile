@@ -29,7 +29,7 @@ CPPFLAGS += -D_POSIX_C_SOURCE=200809L -DCL_TARGET_OPENCL_VERSION=120 \
 # `make render` can install the packages before anything asks for them.
 PKG_CFLAGS = $(shell pkg-config --cflags libpng libcjson OpenEXR assimp 2>/dev/null)
 EXR_CORE   = $(or $(filter -lOpenEXRCore%,$(shell pkg-config --libs OpenEXR 2>/dev/null)),-lOpenEXRCore)
-LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson assimp 2>/dev/null) $(EXR_CORE) -lz -lm -pthread
+LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson 2>/dev/null) $(EXR_CORE) -lz -lm -ldl -pthread
 # --preview: GLFW and Xlib headers only; the libraries are loaded at run time (dlopen).
 GUI_CFLAGS = $(shell pkg-config --cflags glfw3 x11 2>/dev/null)
 CFLAGS  += $(WARN) $(OPT) -pthread $(PKG_CFLAGS) $(GUI_CFLAGS)

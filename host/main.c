@@ -149,10 +149,10 @@ static void report(const cli_options *o, const image *img, const scene *s, const
                render_strategy_name(renderer_strategy(r)), s->width, s->height, s->max_depth);
         printf("scene: %d sphere%s, %d triangle%s, %d polygon%s, %d cone%s; %d instance%s of %d "
                "mesh%s; BVH %d nodes\n",
-               st->spheres, st->spheres == 1 ? "" : "s", st->triangles, st->triangles == 1 ? "" : "s",
-               st->polygons, st->polygons == 1 ? "" : "s", st->cones, st->cones == 1 ? "" : "s",
-               st->instances, st->instances == 1 ? "" : "s", st->meshes, st->meshes == 1 ? "" : "es",
-               st->nodes);
+               st->spheres, st->spheres == 1 ? "" : "s", st->triangles,
+               st->triangles == 1 ? "" : "s", st->polygons, st->polygons == 1 ? "" : "s", st->cones,
+               st->cones == 1 ? "" : "s", st->instances, st->instances == 1 ? "" : "s", st->meshes,
+               st->meshes == 1 ? "" : "es", st->nodes);
         printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu "
                "(hit %llu)\n",
                st->eye_rays, st->eye_hits, st->shadow_rays, st->shadow_blocked, st->secondary_rays,

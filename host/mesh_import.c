@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "assimp_dl.h"
 #include "scene_geom.h"
 #include "sys.h"
 #include "xform.h"
@@ -275,8 +276,12 @@ out_of_memory:
 int mesh_import(const char *path, scene *s, int *mesh, mesh_import_info *info, char *err,
                 size_t errlen)
 {
-    const struct aiScene *ai = aiImportFile(path, MESH_AI_FLAGS);
-    int rc = import_scene(ai, path, s, mesh, info, err, errlen);
+    const struct aiScene *ai;
+    int rc;
+    if (assimp_load(err, errlen) != 0)
+        return -1;
+    ai = aiImportFile(path, MESH_AI_FLAGS);
+    rc = import_scene(ai, path, s, mesh, info, err, errlen);
     if (ai)
         aiReleaseImport(ai);
     return rc;
@@ -290,6 +295,8 @@ int mesh_import_memory(const void *data, size_t size, const char *hint, const ch
         snprintf(err, errlen, "%s: too large", name);
         return -1;
     }
+    if (assimp_load(err, errlen) != 0)
+        return -1;
     ai = aiImportFileFromMemory(data, (unsigned)size, MESH_AI_FLAGS, hint);
     {
         int rc = import_scene(ai, name, s, mesh, info, err, errlen);
