@@ -245,7 +245,8 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
         bvh_box b;
         if (!(rad > 0))
             continue; /* no surface */
-        cw_float4 c = local4(ds, ss->center, rad);
+        /* the radius keeps its sign: negative, the sphere is visible from inside only */
+        cw_float4 c = local4(ds, ss->center, ss->radius);
         ds->sph[ds->nsph].center = c;
         ds->sph[ds->nsph].material = ss->material;
         box_empty(b.lo, b.hi);

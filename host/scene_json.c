@@ -14,16 +14,16 @@
  *     "direction": [x,y,z] },                      oblique only, required there
  *   "materials": {"name": {"ka","kd","ks","km","kt": c, "p": >= 0, "ior": > 0}},
  *   "lights": [{"position": [x,y,z], "intensity": c}],
- *   "objects": [{"type": "sphere", "center", "radius" (> 0), "material"},
- *               {"type": "triangle", "vertices": 3 points, "normals" (optional), "material"},
- *               {"type": "polygon", "vertices": >= 3 planar points, "material"}] }
+ *   "objects": [{"type": "sphere" | "triangle" | "polygon" | "cone" | "cylinder", ...}] }
+ *                                                  the keys of each: scene_json_objects.c
  *
  * A colour c is [r,g,b] or one number (grey). Numbers must be finite, magnitude <= 1e18
  * (CW_MAX_ABS); an image side at most 65536 (CW_MAX_SIDE), a depth at most 64 (CW_MAX_DEPTH).
  *
  * cJSON keeps no line numbers. A syntax error's line comes from the parse end; a schema
  * error's from jv_line() (scene_json_value.h). This file reads the sections of the
- * schema; scene_json_value.c the typed values they are made of.
+ * schema; scene_json_objects.c the objects; scene_json_value.c the typed values they are
+ * made of.
  */
 #include "scene_json.h"
 
@@ -36,17 +36,13 @@
 #include "config.h"
 #include "scene_geom.h"
 #include "scene_io.h"
+#include "scene_json_objects.h"
 #include "scene_json_value.h"
-
-typedef struct {
-    const char *name;
-    int index;
-} mat_entry;
 
 typedef struct {
     jv_doc doc; /* the text, its tree and where messages go */
     scene *s;
-    mat_entry *mats; /* material names, sorted */
+    jo_material *mats; /* material names, sorted */
     size_t nmats;
     int camera_only; /* a camera file (--camera): "image", "max_depth" and "camera" only */
 } jreader;
@@ -199,11 +195,6 @@ static int read_camera(const jreader *r, const cJSON *cam)
     return 0;
 }
 
-static int cmp_mat(const void *a, const void *b)
-{
-    return strcmp(((const mat_entry *)a)->name, ((const mat_entry *)b)->name);
-}
-
 static int read_materials(jreader *r, const cJSON *mats)
 {
     static const char *const keys[] = {"ka", "kd", "ks", "km", "kt", "p", "ior", NULL};
@@ -270,7 +261,7 @@ static int read_materials(jreader *r, const cJSON *mats)
         n++;
     }
     r->nmats = n;
-    qsort(r->mats, n, sizeof *r->mats, cmp_mat);
+    qsort(r->mats, n, sizeof *r->mats, jo_material_cmp);
     return 0;
 }
 
@@ -300,180 +291,6 @@ static int read_lights(const jreader *r, const cJSON *lights)
             return jv_oom(&r->doc, l);
     }
     return 0;
-}
-
-/* 0 when the polygon has an area (see scene_area_zero); otherwise fails at `node`. Also
- * gives the unit normal and the size of the polygon. */
-static int check_area(const jreader *r, const cJSON *node, const char *path, const vec3d *p, int n,
-                      double unit[3], double *size_out)
-{
-    scene_area a;
-    int i, k;
-    scene_area_init(&a);
-    for (i = 0; i < n; i++)
-        scene_area_add(&a, p[i]);
-    if (scene_area_zero(&a))
-        return jv_fail(&r->doc, node, "%s: the %s has zero area", path,
-                       n == 3 ? "triangle" : "polygon");
-    for (k = 0; k < 3; k++)
-        unit[k] = a.normal[k] / a.len;
-    *size_out = scene_area_size(&a);
-    return 0;
-}
-
-static int find_material(const jreader *r, const cJSON *obj, const char *path)
-{
-    const cJSON *m = jv_need(&r->doc, obj, path, "material");
-    const char *name;
-    mat_entry key, *hit;
-    char buf[SCENE_SHOWN_LEN];
-    if (!m)
-        return -1;
-    if (!(name = cJSON_GetStringValue(m)))
-        return jv_fail(&r->doc, m, "%s.material: expected a material name, found %s", path,
-                       jv_type_name(m));
-    key.name = name;
-    key.index = 0;
-    hit = r->nmats ? bsearch(&key, r->mats, r->nmats, sizeof key, cmp_mat) : NULL;
-    if (!hit)
-        return jv_fail(&r->doc, m, "%s.material: no material named \"%s\" in \"materials\"", path,
-                       scene_shown(name, buf));
-    return hit->index;
-}
-
-static int read_object(const jreader *r, const cJSON *o, int i)
-{
-    static const char *const sphere_keys[] = {"type", "center", "radius", "material", NULL};
-    static const char *const tri_keys[] = {"type", "vertices", "normals", "material", NULL};
-    static const char *const poly_keys[] = {"type", "vertices", "material", NULL};
-    char path[64], sub[96];
-    const cJSON *t, *m;
-    const char *type;
-    int mat;
-    char buf[SCENE_SHOWN_LEN];
-    snprintf(path, sizeof path, "objects[%d]", i);
-    if (jv_check_object(&r->doc, o, path, NULL) != 0)
-        return -1;
-    if (!(t = jv_need(&r->doc, o, path, "type")))
-        return -1;
-    type = cJSON_GetStringValue(t);
-    if (!type || (strcmp(type, "sphere") != 0 && strcmp(type, "triangle") != 0 &&
-                  strcmp(type, "polygon") != 0)) {
-        if (!type)
-            return jv_fail(&r->doc, t, "%s.type: expected a string, found %s", path,
-                           jv_type_name(t));
-        return jv_fail(&r->doc, t,
-                       "%s.type: unknown object type \"%s\" (expected \"sphere\", \"triangle\" or "
-                       "\"polygon\")",
-                       path, scene_shown(type, buf));
-    }
-    if (jv_check_object(&r->doc, o, path,
-                        type[0] == 's'   ? sphere_keys
-                        : type[0] == 't' ? tri_keys
-                                         : poly_keys) != 0)
-        return -1;
-
-    if (type[0] == 's') {
-        scene_sphere sp;
-        double rad;
-        snprintf(sub, sizeof sub, "%s.center", path);
-        if (!(m = jv_need(&r->doc, o, path, "center")) ||
-            jv_point(&r->doc, m, sub, &sp.center) != 0)
-            return -1;
-        snprintf(sub, sizeof sub, "%s.radius", path);
-        if (!(m = jv_need(&r->doc, o, path, "radius")) || jv_number(&r->doc, m, sub, &rad) != 0)
-            return -1;
-        if (!((float)rad > 0)) /* as stored: a float */
-            return jv_fail(&r->doc, m, "%s: the radius must be > 0, found %.10g%s", sub, rad,
-                           scene_single_note(rad, buf, sizeof buf));
-        if ((mat = find_material(r, o, path)) < 0)
-            return -1;
-        sp.radius = (float)rad;
-        sp.material = mat;
-        return scene_push(&r->s->spheres, &sp, sizeof sp) < 0 ? jv_oom(&r->doc, o) : 0;
-    }
-
-    {
-        vec3d *pts;
-        int n, k;
-        double unit[3] = {0, 0, 0}, size = 0;
-        const cJSON *verts = jv_need(&r->doc, o, path, "vertices");
-        int tri = type[0] == 't';
-        if (!verts)
-            return -1;
-        snprintf(sub, sizeof sub, "%s.vertices", path);
-        if (jv_points(&r->doc, verts, sub, 3, tri ? 3 : CW_MAX_VERTS, &pts, &n) != 0)
-            return -1;
-        if (check_area(r, verts, sub, pts, n, unit, &size) != 0) {
-            free(pts);
-            return -1;
-        }
-        if (!tri) {
-            /* planar: every vertex within 1e-4 * size of the plane through the centroid */
-            double c[3] = {0, 0, 0};
-            const cJSON *vn = verts->child;
-            for (k = 0; k < n; k++) {
-                c[0] += pts[k].x;
-                c[1] += pts[k].y;
-                c[2] += pts[k].z;
-            }
-            c[0] /= n;
-            c[1] /= n;
-            c[2] /= n;
-            for (k = 0; k < n; k++, vn = vn->next) {
-                double off = (pts[k].x - c[0]) * unit[0] + (pts[k].y - c[1]) * unit[1] +
-                             (pts[k].z - c[2]) * unit[2];
-                if (fabs(off) > 1e-4 * size) {
-                    free(pts);
-                    return jv_fail(&r->doc, vn,
-                                   "%s[%d]: the polygon is not planar: this vertex lies %g off its "
-                                   "plane (tolerance %g)",
-                                   sub, k, fabs(off), 1e-4 * size);
-                }
-            }
-        }
-        if ((mat = find_material(r, o, path)) < 0) {
-            free(pts);
-            return -1;
-        }
-        if (tri) {
-            vec3d p[3];
-            vec3f nv[3], *normals = NULL;
-            memcpy(p, pts, sizeof p);
-            free(pts);
-            if ((m = jv_member(o, "normals"))) {
-                vec3d *nrm;
-                int nn;
-                const cJSON *e;
-                snprintf(sub, sizeof sub, "%s.normals", path);
-                if (jv_points(&r->doc, m, sub, 3, 3, &nrm, &nn) != 0)
-                    return -1;
-                for (k = 0, e = m->child; k < 3; k++, e = e->next) {
-                    vec3f nf = vec3f_make((float)nrm[k].x, (float)nrm[k].y, (float)nrm[k].z);
-                    if (vec3f_normalize(nf, &nv[k]) != 0) {
-                        free(nrm);
-                        return jv_fail(&r->doc, e, "%s[%d]: the normal is zero", sub, k);
-                    }
-                }
-                free(nrm);
-                normals = nv;
-            }
-            return scene_push_triangle(r->s, p, normals, mat) < 0 ? jv_oom(&r->doc, o) : 0;
-        } else {
-            scene_polygon poly;
-            poly.first = (int)r->s->poly_verts.count;
-            poly.count = n;
-            poly.material = mat;
-            for (k = 0; k < n; k++) {
-                if (scene_push(&r->s->poly_verts, &pts[k], sizeof pts[k]) < 0) {
-                    free(pts);
-                    return jv_oom(&r->doc, o);
-                }
-            }
-            free(pts);
-            return scene_push(&r->s->polygons, &poly, sizeof poly) < 0 ? jv_oom(&r->doc, o) : 0;
-        }
-    }
 }
 
 static int read_scene(jreader *r, const cJSON *root)
@@ -514,10 +331,15 @@ static int read_scene(jreader *r, const cJSON *root)
     if ((m = jv_member(root, "objects"))) {
         const cJSON *o;
         int i = 0;
+        jo_reader objs;
+        objs.doc = &r->doc;
+        objs.s = s;
+        objs.mats = r->mats;
+        objs.nmats = r->nmats;
         if (!cJSON_IsArray(m))
             return jv_fail(&r->doc, m, "objects: expected an array, found %s", jv_type_name(m));
         for (o = m->child; o; o = o->next, i++)
-            if (read_object(r, o, i) != 0)
+            if (jo_read_object(&objs, o, i) != 0)
                 return -1;
     }
     return 0;

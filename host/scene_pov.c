@@ -439,6 +439,11 @@ int pov_write_scene(const scene *s, FILE *f, char *err, size_t errlen)
 
     for (i = 0; i < s->spheres.count; i++) {
         const scene_sphere *sp = &SCENE_AT(s->spheres, scene_sphere, i);
+        /* POV-Ray has no one-sided sphere: an inside-only one (negative radius) is written
+         * as an ordinary sphere, exact for every ray that starts inside it (a camera and
+         * lights inside, as in a sky dome), but seen from outside it hides what is behind */
+        if (sp->radius < 0)
+            fprintf(f, "// visible from inside only in the scene: the same from inside\n");
         fprintf(f, "sphere { ");
         putp3(f, sp->center);
         fprintf(f, ", %.9g", fabs((double)sp->radius));

@@ -27,7 +27,7 @@
 #define CW_PROJ_OBLIQUE 2
 
 typedef struct {
-    cw_float4 center; /* xyz: centre, w: radius */
+    cw_float4 center; /* xyz: centre, w: radius (< 0: visible from inside only) */
     int material;
     int pad0, pad1, pad2;
 } cw_sphere;

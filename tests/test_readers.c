@@ -901,6 +901,112 @@ static void test_json_bad_objects(void **state)
              "x.json:5: ", "objects[0].vertices[2][1]", "expected a number", NULL);
     json_bad("{\n" JCAM ",\n\"objects\": {}}", "x.json:3: ", "objects: expected an array", NULL,
              NULL);
+    /* spheres seen from inside, cones, cylinders, smooth polygons */
+    json_bad("{\n" JCAM JMAT "{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1,\n"
+             " \"inside\": 1, \"material\": \"m\"}]}",
+             "x.json:5: ", "objects[0].inside", "expected true or false", "a number");
+    json_bad("{\n" JCAM JMAT "{\"type\": \"cone\", \"base\": [0, 0, 0], \"base_radius\": 0,\n"
+             " \"apex\": [0, 1, 0], \"apex_radius\": 0, \"material\": \"m\"}]}",
+             "x.json:4: ", "objects[0]: base_radius and apex_radius are both zero", NULL, NULL);
+    json_bad("{\n" JCAM JMAT "{\"type\": \"cone\", \"base\": [0, 0, 0], \"base_radius\": 1,\n"
+             " \"apex\": [0, 1, 0], \"apex_radius\": -0.5, \"material\": \"m\"}]}",
+             "x.json:5: ", "objects[0].apex_radius", ">= 0", "-0.5");
+    json_bad("{\n" JCAM JMAT "{\"type\": \"cone\", \"base\": [0, 0, 0], \"base_radius\": 1,\n"
+             " \"apex\": [0, 1, 0], \"material\": \"m\"}]}",
+             "x.json:4: ", "objects[0]: missing \"apex_radius\"", NULL, NULL);
+    json_bad("{\n" JCAM JMAT "{\"type\": \"cone\", \"base\": [0, 0, 0], \"base_radius\": 1,\n"
+             " \"apex\": [0, 1, 0], \"apex_radius\": 1, \"radius\": 1, \"material\": \"m\"}]}",
+             "x.json:5: ", "radius", NULL, NULL);
+    json_bad("{\n" JCAM JMAT "{\"type\": \"cylinder\", \"base\": [1, 2, 3],\n"
+             " \"apex\": [1, 2, 3], \"radius\": 1, \"material\": \"m\"}]}",
+             "x.json:5: ", "objects[0].apex: equals the base", NULL, NULL);
+    json_bad("{\n" JCAM JMAT "{\"type\": \"cylinder\", \"base\": [0, 0, 0],\n"
+             " \"apex\": [0, 1, 0], \"radius\": 0, \"material\": \"m\"}]}",
+             "x.json:5: ", "objects[0].radius", "> 0", NULL);
+    json_bad("{\n" JCAM JMAT "{\"type\": \"polygon\", \"material\": \"m\",\n"
+             " \"vertices\": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],\n"
+             " \"normals\": [[0, 0, 1], [0, 0, 1], [0, 0, 1]]}]}",
+             "x.json:6: ", "objects[0].normals", "expected 4 points", "found 3");
+}
+
+/* The objects NFF has and JSON gained: an inside-only sphere (stored with a negative
+ * radius, as NFF's), a cone, a cylinder, a polygon with vertex normals (a fan of smooth
+ * triangles, as NFF's pp). */
+static void test_json_more_objects(void **state)
+{
+    scene s, n;
+    const scene_cone *c;
+    const scene_triangle *t;
+    size_t i;
+    (void)state;
+    parse_ok(json_scene_parse,
+             "{" JCAM ", \"materials\": {\"m\": {}}, \"objects\": [\n"
+             "{\"type\": \"sphere\", \"center\": [1, 2, 3], \"radius\": 4, \"inside\": true,\n"
+             " \"material\": \"m\"},\n"
+             "{\"type\": \"sphere\", \"center\": [1, 2, 3], \"radius\": 0.5, \"inside\": false,\n"
+             " \"material\": \"m\"},\n"
+             "{\"type\": \"cone\", \"base\": [0, 0, 0], \"base_radius\": 1, \"apex\": [0, 2, 0],\n"
+             " \"apex_radius\": 0, \"material\": \"m\"},\n"
+             "{\"type\": \"cylinder\", \"base\": [1, 0, 0], \"apex\": [1, 0, 3], \"radius\": 0.25,\n"
+             " \"material\": \"m\"},\n"
+             "{\"type\": \"polygon\", \"material\": \"m\",\n"
+             " \"vertices\": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],\n"
+             " \"normals\": [[0, 0, 2], [0, 1, 1], [1, 1, 1], [1, 0, 1]]}]}\n",
+             "more.json", &s);
+    assert_int_equal(s.spheres.count, 2);
+    assert_near(SCENE_AT(s.spheres, scene_sphere, 0).radius, -4);
+    assert_pos(SCENE_AT(s.spheres, scene_sphere, 0).center, 1, 2, 3);
+    assert_near(SCENE_AT(s.spheres, scene_sphere, 1).radius, 0.5f);
+    assert_int_equal(s.cones.count, 2);
+    c = &SCENE_AT(s.cones, scene_cone, 0);
+    assert_pos(c->base, 0, 0, 0);
+    assert_pos(c->apex, 0, 2, 0);
+    assert_near(c->base_radius, 1);
+    assert_near(c->apex_radius, 0);
+    c = &SCENE_AT(s.cones, scene_cone, 1);
+    assert_pos(c->apex, 1, 0, 3);
+    assert_near(c->base_radius, 0.25f);
+    assert_near(c->apex_radius, 0.25f);
+    /* the smooth polygon: triangles (v0, v1, v2) and (v0, v2, v3), normals normalised */
+    assert_int_equal(s.polygons.count, 0);
+    assert_int_equal(s.triangles.count, 2);
+    t = &SCENE_AT(s.triangles, scene_triangle, 1);
+    assert_pos(t->p[0], 0, 0, 0);
+    assert_pos(t->p[1], 1, 1, 0);
+    assert_pos(t->p[2], 0, 1, 0);
+    assert_non_null(scene_triangle_normals(&s, t));
+    assert_vec(scene_triangle_normals(&s, t)[0], 0, 0, 1);
+    assert_vec(scene_triangle_normals(&s, t)[2], 0.70710678f, 0, 0.70710678f);
+
+    /* the same objects as NFF gives the same model (but the materials) */
+    parse_ok(nff_parse,
+             "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 60\nhither 1\nresolution 64 48\n"
+             "s 1 2 3 -4\ns 1 2 3 0.5\nc 0 0 0 1 0 2 0 0\nc 1 0 0 0.25 1 0 3 0.25\n"
+             "pp 4\n0 0 0 0 0 2\n1 0 0 0 1 1\n1 1 0 1 1 1\n0 1 0 1 0 1\n",
+             "more.nff", &n);
+    assert_int_equal(n.spheres.count, 2);
+    for (i = 0; i < 2; i++) {
+        assert_memory_equal(&SCENE_AT(n.spheres, scene_sphere, i).center,
+                            &SCENE_AT(s.spheres, scene_sphere, i).center, sizeof(vec3d));
+        assert_true(SCENE_AT(n.spheres, scene_sphere, i).radius ==
+                    SCENE_AT(s.spheres, scene_sphere, i).radius);
+    }
+    assert_int_equal(n.cones.count, 2);
+    for (i = 0; i < 2; i++) {
+        const scene_cone *a = &SCENE_AT(n.cones, scene_cone, i), *b = &SCENE_AT(s.cones, scene_cone, i);
+        assert_memory_equal(&a->base, &b->base, sizeof a->base);
+        assert_memory_equal(&a->apex, &b->apex, sizeof a->apex);
+        assert_true(a->base_radius == b->base_radius && a->apex_radius == b->apex_radius);
+    }
+    assert_int_equal(n.triangles.count, 2);
+    assert_int_equal(n.tri_normals.count, s.tri_normals.count);
+    assert_memory_equal(n.tri_normals.data, s.tri_normals.data,
+                        s.tri_normals.count * sizeof(vec3f));
+    for (i = 0; i < 2; i++)
+        assert_memory_equal(SCENE_AT(n.triangles, scene_triangle, i).p,
+                            SCENE_AT(s.triangles, scene_triangle, i).p, 3 * sizeof(vec3d));
+    scene_free(&n);
+    scene_free(&s);
 }
 
 /* The line finder must step over strings with escapes and brackets, nested arrays and
@@ -1383,6 +1489,7 @@ int main(void)
         cmocka_unit_test(test_json_bad_values),
         cmocka_unit_test(test_json_bad_camera),
         cmocka_unit_test(test_json_bad_objects),
+        cmocka_unit_test(test_json_more_objects),
         cmocka_unit_test(test_json_lines),
         cmocka_unit_test(test_nul_byte),
         cmocka_unit_test(test_fixture_files),

@@ -5,8 +5,10 @@
  * math), whose failures are figures, never assertions.
  *
  *  1. spheres: far and tiny (radius/distance 1e-1 .. 1e-6 at distances 1 .. 1e6), huge
- *     (radius 1e6), and rays starting on, just inside and just outside the surface,
- *     against a double-precision answer on the same float ray;
+ *     (radius 1e6), and rays starting on, just inside and just outside the surface (of
+ *     ordinary spheres and of spheres visible from inside only: a negative radius, whose
+ *     one hit is where the ray leaves), against a double-precision answer on the same
+ *     float ray;
  *  2. watertightness: a closed mesh far from the origin, 1,000,000 rays from inside aimed
  *     exactly at its shared edges and vertices: no misses;
  *  3. self-hits: secondary rays spawned with the kernels' own prim_surface/shade_spawn
@@ -376,14 +378,16 @@ typedef struct {
     double rho;  /* distance from the centre to the ray's line */
     double M;    /* |o - c| + r: the magnitude the float computation works at */
     double cosi; /* |cos| of the angle between the ray and the normal at the roots */
+    int inside;  /* a negative radius: visible from inside only, t1 alone counts */
 } sph_ref;
 
 /* The exact roots (to double rounding) of |o + t d - c| = r for the float ray and sphere
- * converted to double; d's length is not assumed to be 1. */
+ * converted to double; d's length is not assumed to be 1. A negative radius (visible from
+ * inside only) gives the same roots, of which only t1 (the ray leaving) is a hit. */
 static sph_ref sphere_ref(const cw_ray *ray, const cw_sphere *sp)
 {
     dvec o = dv4(ray->origin), d = dv4(ray->dir), c = dv4(sp->center);
-    double r = sp->center.w, a = ddot(d, d);
+    double r = fabs(sp->center.w), a = ddot(d, d);
     dvec f = dsub(o, c);
     double b = ddot(f, d);
     dvec perp = dsub(f, dscale(d, b / a));
@@ -394,6 +398,7 @@ static sph_ref sphere_ref(const cw_ray *ray, const cw_sphere *sp)
     ref.cosi = disc > 0 ? sqrt(disc) / r : 0;
     ref.n = 0;
     ref.t0 = ref.t1 = 0;
+    ref.inside = sp->center.w < 0;
     if (disc < 0)
         return ref;
     sq = sqrt(a * disc);
@@ -450,14 +455,14 @@ static void sph_check(sph_stats *st, const cw_ray *ray, const cw_sphere *sp, con
                       int show)
 {
     sph_ref ref = sphere_ref(ray, sp);
-    double r = sp->center.w, um = U_F * ref.M;
+    double r = fabs(sp->center.w), um = U_F * ref.M;
     double tb = ref.cosi > 0 ? KT * um / ref.cosi : INFINITY;
     int khit = hit->kind == CW_PRIM_SPHERE, rhit = 0, agree;
     double texp = 0, dist_band;
     st->n++;
     if (hit_has_nan(hit) && khit)
         st->nan++;
-    if (ref.n && ref.t0 > 0) {
+    if (ref.n && ref.t0 > 0 && !ref.inside) {
         rhit = 1;
         texp = ref.t0;
     } else if (ref.n && ref.t1 > 0) {
@@ -651,27 +656,35 @@ static void test_sphere_huge_and_surface(void **state)
     printf("rays from the surface (nominal offsets 0, +-1, 4, 16, 64, 256 u M along the normal), "
            "%zu rays per offset:\n",
            per);
-    for (is = 0; is < 3; is++) {
-        static const char *const names[] = {"r 0.3 at (0.5, -0.25, 0.75)",
-                                            "r 2 at (3e3, -1e3, 2e3)", "r 1e6 at (0, -1e6, 0)"};
-        static const double cs[3][4] = {
-            {0.5, -0.25, 0.75, 0.3}, {3e3, -1e3, 2e3, 2}, {0, -1e6, 0, 1e6}};
+    for (is = 0; is < 5; is++) {
+        /* the last two visible from inside only (a negative radius) */
+        static const char *const names[] = {
+            "r 0.3 at (0.5, -0.25, 0.75)", "r 2 at (3e3, -1e3, 2e3)", "r 1e6 at (0, -1e6, 0)",
+            "inside-only r 0.3 at (0.5, -0.25, 0.75)", "inside-only r 2 at (3e3, -1e3, 2e3)"};
+        static const double cs[5][4] = {{0.5, -0.25, 0.75, 0.3},
+                                        {3e3, -1e3, 2e3, 2},
+                                        {0, -1e6, 0, 1e6},
+                                        {0.5, -0.25, 0.75, -0.3},
+                                        {3e3, -1e3, 2e3, -2}};
+        double R0;
         sph_stats rob[3], fast[3]; /* on, inside, outside */
         int k;
         sphere_scene(dv(cs[is][0], cs[is][1], cs[is][2]), cs[is][3], &sp);
         c = dv4(sp.center);
+        R0 = fabs(sp.center.w);
+        assert_true((sp.center.w < 0) == (cs[is][3] < 0)); /* the sign reaches the kernels */
         for (k = 0; k < 3; k++) {
             sph_stats_init(&rob[k], 11 * (long)per);
             sph_stats_init(&fast[k], 11 * (long)per);
         }
         for (id = 0; id < 2 * (sizeof deltas / sizeof deltas[0]) - 1; id++) {
             /* id 0: on the surface; odd: inside; even: outside */
-            double um = U_F * 2 * sp.center.w;
+            double um = U_F * 2 * R0;
             double delta = id == 0 ? 0 : (id % 2 ? -1 : 1) * deltas[(id + 1) / 2] * um;
             int cls = id == 0 ? 0 : (id % 2 ? 1 : 2);
             for (i = 0; i < per; i++) {
                 dvec n = rnd_dir();
-                rays[i] = make_ray(dadd(c, dscale(n, sp.center.w + delta)), rnd_dir());
+                rays[i] = make_ray(dadd(c, dscale(n, R0 + delta)), rnd_dir());
             }
             sphere_run(&sp, rays, per, hits, &rob[cls], &fast[cls]);
         }

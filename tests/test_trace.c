@@ -8,6 +8,8 @@
  *   parallel); total internal reflection in a prism sends the (km + kt)-weighted ray on;
  * - cones: closed-form cases (cylinder, cone, open ends, negative radii, a ray parallel
  *   to the side, degenerate cones) and random rays against a double-precision solver;
+ * - spheres visible from inside only (a negative radius): seen from outside and from
+ *   inside, and a light inside one (shadow rays);
  * - specialised builds: the feature flags follow the scene, forced flags really remove
  *   code, bad flags fail with the build log;
  * - ray statistics and the SPD corner mode against counts and images made on the host.
@@ -1145,6 +1147,112 @@ static void test_cone_random(void **state)
 }
 
 /* ======================================================================================== */
+/* 3b. Spheres visible from inside only (a negative radius, NFF)                            */
+
+/* The image of one render of s (finished and uploaded here). */
+static void render_scene(scene *s, image *img)
+{
+    upload(s);
+    render(img);
+}
+
+/* Checks pixel (i, j) of an 8 x 8 image against a grey. */
+static void expect_grey(const image *img, int i, int j, double want, const char *what)
+{
+    int c;
+    for (c = 0; c < 3; c++)
+        assert_near(img->rgb[3 * (j * img->width + i) + c], want, 1e-6, what);
+}
+
+static void test_inside_spheres(void **state)
+{
+    static const int precisions[] = {RENDER_ROBUST, RENDER_FAST};
+    int ip;
+    (void)state;
+    for (ip = 0; ip < 2; ip++) {
+        scene s;
+        image img, ref;
+        int i, j, n[3] = {0, 0, 0}, lit_differs = 0;
+        settings(0, 0, precisions[ip]);
+        printf("  %s path:\n", ip ? "fast" : "robust");
+
+        /* From outside (orthographic, 8 x 8 over [-1, 1]^2): an inside-only sphere of radius
+         * 0.8 (ka 0.25) around an ordinary one of radius 0.3 (ka 0.75). The near side is
+         * not hit: the inner ball shows, and around it the inside of the far side. */
+        base_scene(&s, 8, 8);
+        s.ambient = grey(1);
+        s.background = grey(0.5f);
+        tu_add_sphere(&s, 0, 0, 0, -0.8, add_flat(&s, grey(0.25f)));
+        tu_add_sphere(&s, 0, 0, 0, 0.3, add_flat(&s, grey(0.75f)));
+        render_scene(&s, &img);
+        for (j = 0; j < 8; j++)
+            for (i = 0; i < 8; i++) {
+                double x = -1 + (i + 0.5) / 4, y = 1 - (j + 0.5) / 4, r2 = x * x + y * y;
+                int k = r2 < 0.09 ? 0 : r2 < 0.64 ? 1 : 2;
+                expect_grey(&img, i, j, k == 0 ? 0.75 : k == 1 ? 0.25 : 0.5, "from outside");
+                n[k]++;
+            }
+        printf("    from outside: %d pixels see the inner ball, %d the far side, %d the "
+               "background\n",
+               n[0], n[1], n[2]);
+        assert_true(n[0] == 4 && n[1] == 28 && n[2] == 32);
+        image_free(&img);
+        scene_free(&s);
+
+        /* From inside (perspective, 90 degrees, eye at the centre of an inside-only sphere of
+         * radius 5): every pixel sees its wall, not the ball of radius 2 beyond it. */
+        tu_base_scene(&s, SCENE_PERSPECTIVE, 0, 8, 8);
+        s.ambient = grey(1);
+        s.background = grey(0.5f);
+        tu_add_sphere(&s, 0, 0, 0, -5, add_flat(&s, grey(0.25f)));
+        tu_add_sphere(&s, 0, 0, -10, 2, add_flat(&s, grey(0.75f)));
+        render_scene(&s, &img);
+        for (j = 0; j < 8; j++)
+            for (i = 0; i < 8; i++)
+                expect_grey(&img, i, j, 0.25, "from inside");
+        printf("    from inside: every pixel sees the wall\n");
+        image_free(&img);
+        scene_free(&s);
+
+        /* Shadow rays: a light inside an inside-only sphere (a lantern) above a floor lights
+         * the floor as if the sphere were not there; an ordinary sphere would shadow it. */
+        for (i = 0; i < 3; i++) { /* 0: inside-only sphere, 1: none, 2: ordinary */
+            static const vec3f q[4] = {{-2, -2, 0}, {2, -2, 0}, {2, 2, 0}, {-2, 2, 0}};
+            int mat;
+            base_scene(&s, 8, 8);
+            mat = add_material(&s, grey(0), grey(0.5f), grey(0), grey(0), grey(0), 1, 1);
+            add_face(&s, q, vec3f_make(0, 0, 1), mat);
+            add_light(&s, vec3f_make(0, 0, 1), grey(1));
+            if (i != 1)
+                tu_add_sphere(&s, 0, 0, 1, i == 0 ? -0.4 : 0.4, mat);
+            render_scene(&s, i == 0 ? &img : &ref);
+            scene_free(&s);
+            if (i == 0)
+                continue;
+            for (j = 0; j < 8; j++) {
+                int col;
+                for (col = 0; col < 8; col++) {
+                    double x = -1 + (col + 0.5) / 4, y = 1 - (j + 0.5) / 4;
+                    size_t at = 3 * (size_t)(j * 8 + col);
+                    if (x * x + y * y < 0.16 + 0.05)
+                        continue; /* under the sphere (or near its silhouette) */
+                    if (i == 1)
+                        expect_grey(&img, col, j, ref.rgb[at], "lantern: the floor");
+                    else
+                        lit_differs += fabs(img.rgb[at] - ref.rgb[at]) > 1e-3;
+                }
+            }
+            image_free(&ref);
+        }
+        printf("    lantern: the floor lit as without the sphere; %d of its pixels differ from "
+               "an ordinary sphere's shadow\n",
+               lit_differs);
+        assert_true(lit_differs > 0);
+        image_free(&img);
+    }
+}
+
+/* ======================================================================================== */
 /* 4. Specialised builds                                                                    */
 
 /* A sphere of radius 0.5 at the origin, ka 0.25 (ka 0.25 + km x background with a
@@ -1597,6 +1705,7 @@ int main(void)
         cmocka_unit_test(test_cone_cases),
         cmocka_unit_test(test_cone_random),
         cmocka_unit_test(test_cone_flat_far),
+        cmocka_unit_test(test_inside_spheres),
         cmocka_unit_test(test_specialised_builds),
         cmocka_unit_test(test_stats),
         cmocka_unit_test(test_spd),
