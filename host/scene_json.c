@@ -9,7 +9,8 @@
  *     "eye": [x,y,z], "up": [x,y,z],               required
  *     "look_at": [x,y,z] or "view": [x,y,z],       exactly one
  *     "window": [l,r,b,t] or "fov": degrees,       fov: perspective only, the full vertical
- *                                                  angle at the image edges
+ *       or "angle": degrees,                       angle at the image edges; angle: NFF's,
+ *                                                  spanning the outer pixel rows' centres
  *     "distance": d,                               perspective only; default 1
  *     "direction": [x,y,z] },                      oblique only, required there
  *   "materials": {"name": {"ka","kd","ks","km","kt": c, "p": >= 0, "ior": > 0}},
@@ -69,10 +70,11 @@ static int read_image(const jreader *r, const cJSON *img)
 
 static int read_camera(const jreader *r, const cJSON *cam)
 {
-    static const char *const keys[] = {"projection", "eye", "look_at",  "view",      "up",
-                                       "window",     "fov", "distance", "direction", NULL};
+    static const char *const keys[] = {"projection", "eye",       "look_at", "view",
+                                       "up",         "window",    "fov",     "distance",
+                                       "angle",      "direction", NULL};
     scene_camera *c = &r->s->camera;
-    const cJSON *m, *look, *viewn, *up, *win, *fov, *dist, *dirn;
+    const cJSON *m, *look, *viewn, *up, *win, *fov, *dist, *dirn, *ang;
     vec3d eye;
     vec3f upv, view;
     double d = 1.0;
@@ -134,6 +136,27 @@ static int read_camera(const jreader *r, const cJSON *cam)
     fov = jv_member(cam, "fov");
     dirn = jv_member(cam, "direction");
     win = jv_member(cam, "window");
+    ang = jv_member(cam, "angle");
+    if (ang) { /* NFF's angle: a window at distance 1 from the final image size */
+        double deg;
+        if (c->projection != SCENE_PERSPECTIVE)
+            return jv_fail(&r->doc, ang,
+                           "camera.angle: only a perspective camera has an NFF angle; give "
+                           "\"window\"");
+        if (fov || win || dist)
+            return jv_fail(&r->doc, ang,
+                           "camera.angle: give one of \"angle\", \"fov\" and \"window\", and no "
+                           "\"distance\" with \"angle\" (it is 1)");
+        if (jv_number(&r->doc, ang, "camera.angle", &deg) != 0)
+            return -1;
+        if (!((float)deg > 0 && (float)deg < 180)) /* as stored: a float */
+            return jv_fail(&r->doc, ang,
+                           "camera.angle: must lie strictly between 0 and 180 degrees, found "
+                           "%.10g%s",
+                           deg, scene_single_note(deg, buf, sizeof buf));
+        c->nff_angle_deg = (float)deg;
+        c->d = 1.0f;
+    }
     if (c->projection != SCENE_PERSPECTIVE && dist)
         return jv_fail(&r->doc, dist,
                        "camera.distance: only a perspective camera has an image-plane distance");
@@ -175,9 +198,9 @@ static int read_camera(const jreader *r, const cJSON *cam)
         c->r = (float)w[1];
         c->b = (float)w[2];
         c->t = (float)w[3];
-    } else {
+    } else if (!ang) {
         return jv_fail(&r->doc, cam, "camera: missing \"window\" [l, r, b, t]%s",
-                       c->projection == SCENE_PERSPECTIVE ? " or \"fov\"" : "");
+                       c->projection == SCENE_PERSPECTIVE ? ", \"fov\" or \"angle\"" : "");
     }
     if (c->projection == SCENE_OBLIQUE) {
         if (!dirn)
@@ -191,7 +214,11 @@ static int read_camera(const jreader *r, const cJSON *cam)
     }
     /* what is left, e.g. a field of view too small or too wide for the distance and size */
     if (scene_check_view(r->s, buf, sizeof buf) != 0)
-        return jv_fail(&r->doc, fov ? fov : cam, "camera: gives no usable view: %s", buf);
+        return jv_fail(&r->doc,
+                       fov   ? fov
+                       : ang ? ang
+                             : cam,
+                       "camera: gives no usable view: %s", buf);
     return 0;
 }
 

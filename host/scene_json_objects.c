@@ -66,8 +66,8 @@ static int check_area(const jo_reader *r, const cJSON *node, const char *path, c
 }
 
 /* Fails unless every vertex lies within 1e-4 * size of the plane through the centroid. */
-static int check_planar(const jo_reader *r, const cJSON *verts, const char *path,
-                        const vec3d *pts, int n, const double unit[3], double size)
+static int check_planar(const jo_reader *r, const cJSON *verts, const char *path, const vec3d *pts,
+                        int n, const double unit[3], double size)
 {
     double c[3] = {0, 0, 0};
     const cJSON *vn = verts->child;
@@ -81,8 +81,8 @@ static int check_planar(const jo_reader *r, const cJSON *verts, const char *path
     c[1] /= n;
     c[2] /= n;
     for (k = 0; k < n; k++, vn = vn->next) {
-        double off = (pts[k].x - c[0]) * unit[0] + (pts[k].y - c[1]) * unit[1] +
-                     (pts[k].z - c[2]) * unit[2];
+        double off =
+            (pts[k].x - c[0]) * unit[0] + (pts[k].y - c[1]) * unit[1] + (pts[k].z - c[2]) * unit[2];
         if (fabs(off) > 1e-4 * size)
             return jv_fail(r->doc, vn,
                            "%s[%d]: the polygon is not planar: this vertex lies %g off its "
@@ -110,8 +110,7 @@ static int radius(const jo_reader *r, const cJSON *o, const char *path, const ch
 }
 
 /* A required point. */
-static int point(const jo_reader *r, const cJSON *o, const char *path, const char *key,
-                 vec3d *out)
+static int point(const jo_reader *r, const cJSON *o, const char *path, const char *key, vec3d *out)
 {
     char sub[96];
     const cJSON *m;
@@ -260,18 +259,20 @@ free_pts:
 
 int jo_read_object(const jo_reader *r, const cJSON *o, int i)
 {
-    static const char *const sphere_keys[] = {"type", "center", "radius", "inside", "material",
-                                              NULL};
+    static const char *const sphere_keys[] = {"type",   "center",   "radius",
+                                              "inside", "material", NULL};
     static const char *const face_keys[] = {"type", "vertices", "normals", "material", NULL};
     static const char *const cone_keys[] = {"type",        "base",     "base_radius", "apex",
                                             "apex_radius", "material", NULL};
-    static const char *const cylinder_keys[] = {"type",   "base",     "apex",
-                                                "radius", "material", NULL};
+    static const char *const cylinder_keys[] = {"type", "base", "apex", "radius", "material", NULL};
     static const struct {
         const char *name;
         const char *const *keys;
-    } types[] = {{"sphere", sphere_keys},     {"triangle", face_keys}, {"polygon", face_keys},
-                 {"cone", cone_keys},         {"cylinder", cylinder_keys}};
+    } types[] = {{"sphere", sphere_keys},
+                 {"triangle", face_keys},
+                 {"polygon", face_keys},
+                 {"cone", cone_keys},
+                 {"cylinder", cylinder_keys}};
     char path[64], buf[SCENE_SHOWN_LEN];
     const cJSON *t;
     const char *type;

@@ -182,6 +182,18 @@ check "imgtool convert --crop" 0 $?
 "$IMGTOOL" raw "$T/fullcut.exr" "$T/a.raw" >/dev/null 2>&1; "$IMGTOOL" raw "$T/crop.exr" "$T/b.raw" >/dev/null 2>&1
 check_true "--crop: exactly the full render's pixels" cmp -s "$T/a.raw" "$T/b.raw"
 
+# JSON says what NFF says: the NFF scenes of tests/scenes/inside/ (spheres visible from inside
+# only, seen from inside and outside; NFF's camera angle) and their JSON copies give the same
+# pixels
+for name in room bowl; do
+    for ext in nff json; do
+        "$BIN" -q -o "$T/$name-$ext.exr" "tests/scenes/inside/$name.$ext" >"$T/out" 2>"$T/err"
+        check "tests/scenes/inside/$name.$ext" 0 $?
+        "$IMGTOOL" raw "$T/$name-$ext.exr" "$T/$name-$ext.raw" >/dev/null 2>&1
+    done
+    check_true "$name.json: the pixels of $name.nff" cmp -s "$T/$name-nff.raw" "$T/$name-json.raw"
+done
+
 # --png16: a 16-bit PNG (tests/test_image.c round-trips the values)
 "$BIN" -q -W 16 -H 12 --png16 -o "$T/p16.png" scenes/default.json >"$T/out" 2>"$T/err"; check "--png16" 0 $?
 check_true "--png16: IHDR says 16 bits" sh -c "od -An -tu1 -j24 -N1 '$T/p16.png' | grep -qw 16"

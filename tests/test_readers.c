@@ -830,6 +830,19 @@ static void test_json_bad_camera(void **state)
              "x.json:3: ", "\"window\" or \"fov\", not both", NULL, NULL);
     json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0]}}",
              "x.json:2: ", "missing \"window\"", "\"fov\"", NULL);
+    /* NFF's angle */
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0],\n"
+             "\"angle\": 0}}",
+             "x.json:3: ", "camera.angle", "between 0 and 180", NULL);
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0],\n"
+             "\"fov\": 60,\n\"angle\": 60}}",
+             "x.json:4: ", "camera.angle", "one of \"angle\", \"fov\" and \"window\"", NULL);
+    json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0],\n"
+             "\"distance\": 2, \"angle\": 60}}",
+             "x.json:3: ", "camera.angle", "no \"distance\"", NULL);
+    json_bad("{\n\"camera\": {\"projection\": \"orthographic\", \"eye\": [0, 0, 5],\n"
+             "\"look_at\": [0, 0, 0], \"up\": [0, 1, 0], \"angle\": 60}}",
+             "x.json:3: ", "camera.angle", "only a perspective camera", NULL);
     json_bad("{\n\"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0],\n"
              "\"fov\": 180}}",
              "x.json:3: ", "camera.fov", "between 0 and 180", NULL);
@@ -939,20 +952,21 @@ static void test_json_more_objects(void **state)
     const scene_triangle *t;
     size_t i;
     (void)state;
-    parse_ok(json_scene_parse,
-             "{" JCAM ", \"materials\": {\"m\": {}}, \"objects\": [\n"
-             "{\"type\": \"sphere\", \"center\": [1, 2, 3], \"radius\": 4, \"inside\": true,\n"
-             " \"material\": \"m\"},\n"
-             "{\"type\": \"sphere\", \"center\": [1, 2, 3], \"radius\": 0.5, \"inside\": false,\n"
-             " \"material\": \"m\"},\n"
-             "{\"type\": \"cone\", \"base\": [0, 0, 0], \"base_radius\": 1, \"apex\": [0, 2, 0],\n"
-             " \"apex_radius\": 0, \"material\": \"m\"},\n"
-             "{\"type\": \"cylinder\", \"base\": [1, 0, 0], \"apex\": [1, 0, 3], \"radius\": 0.25,\n"
-             " \"material\": \"m\"},\n"
-             "{\"type\": \"polygon\", \"material\": \"m\",\n"
-             " \"vertices\": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],\n"
-             " \"normals\": [[0, 0, 2], [0, 1, 1], [1, 1, 1], [1, 0, 1]]}]}\n",
-             "more.json", &s);
+    parse_ok(
+        json_scene_parse,
+        "{" JCAM ", \"materials\": {\"m\": {}}, \"objects\": [\n"
+        "{\"type\": \"sphere\", \"center\": [1, 2, 3], \"radius\": 4, \"inside\": true,\n"
+        " \"material\": \"m\"},\n"
+        "{\"type\": \"sphere\", \"center\": [1, 2, 3], \"radius\": 0.5, \"inside\": false,\n"
+        " \"material\": \"m\"},\n"
+        "{\"type\": \"cone\", \"base\": [0, 0, 0], \"base_radius\": 1, \"apex\": [0, 2, 0],\n"
+        " \"apex_radius\": 0, \"material\": \"m\"},\n"
+        "{\"type\": \"cylinder\", \"base\": [1, 0, 0], \"apex\": [1, 0, 3], \"radius\": 0.25,\n"
+        " \"material\": \"m\"},\n"
+        "{\"type\": \"polygon\", \"material\": \"m\",\n"
+        " \"vertices\": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],\n"
+        " \"normals\": [[0, 0, 2], [0, 1, 1], [1, 1, 1], [1, 0, 1]]}]}\n",
+        "more.json", &s);
     assert_int_equal(s.spheres.count, 2);
     assert_near(SCENE_AT(s.spheres, scene_sphere, 0).radius, -4);
     assert_pos(SCENE_AT(s.spheres, scene_sphere, 0).center, 1, 2, 3);
@@ -993,7 +1007,8 @@ static void test_json_more_objects(void **state)
     }
     assert_int_equal(n.cones.count, 2);
     for (i = 0; i < 2; i++) {
-        const scene_cone *a = &SCENE_AT(n.cones, scene_cone, i), *b = &SCENE_AT(s.cones, scene_cone, i);
+        const scene_cone *a = &SCENE_AT(n.cones, scene_cone, i),
+                         *b = &SCENE_AT(s.cones, scene_cone, i);
         assert_memory_equal(&a->base, &b->base, sizeof a->base);
         assert_memory_equal(&a->apex, &b->apex, sizeof a->apex);
         assert_true(a->base_radius == b->base_radius && a->apex_radius == b->apex_radius);
