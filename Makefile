@@ -273,7 +273,8 @@ FUZZ_CFLAGS  := -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefin
 FUZZ_SRC       := host/scene.c host/scene_geom.c host/scene_mesh.c host/xform.c host/scene_io.c \
                   host/sys.c
 FUZZ_SRC_nff   := $(FUZZ_SRC) host/scene_nff.c host/scene_nff_lex.c
-FUZZ_SRC_json  := $(FUZZ_SRC) host/scene_json.c host/scene_json_objects.c host/scene_json_value.c
+FUZZ_SRC_json  := $(FUZZ_SRC) host/scene_json.c host/scene_json_objects.c host/scene_json_value.c \
+                  host/scene_json_xform.c
 FUZZ_LIBS_json  = $(shell pkg-config --libs libcjson 2>/dev/null)
 FUZZ_HEADERS   := tests/fuzz/fuzz_check.h host/config.h host/sys.h host/xform.h $(wildcard host/scene*.h)
 # Inputs up to 64 KiB (larger seeds, such as the SPD scenes, are cut there); 10 s per input
