@@ -10,6 +10,7 @@
 #include "cli_num.h"
 #include "config.h"
 #include "progress.h"
+#include "scene_geom.h"
 #include "sys.h"
 #include "version.h"
 
@@ -41,6 +42,13 @@ static void usage(FILE *f)
 "      --camera FILE     the camera (and image size and depth) of a JSON camera file,\n"
 "                        as the preview's C key writes it; -W, -H, -d still win\n"
 "                        (default: the scene's camera)\n"
+"      --look-from X,Y,Z  the eye; alone, it keeps the view direction\n"
+"                        (default: the scene's, or --camera's)\n"
+"      --look-at X,Y,Z   the point the eye looks at (default: the scene's view\n"
+"                        direction)\n"
+"      --up X,Y,Z        the image's vertical (default: the scene's up)\n"
+"      --fov DEG         vertical field of view of a perspective camera, at the\n"
+"                        image edges, 0..180 exclusive (default: the scene's)\n"
 "      --crop X0,X1,Y0,Y1  render only the pixels X0..X1-1, Y0..Y1-1 (row 0 at the\n"
 "                        top) of the full image: exactly those pixels of it\n"
 "                        (default: the whole image)\n"
@@ -153,7 +161,11 @@ enum {
     OPT_THREADS,
     OPT_CROP,
     OPT_PNG16,
-    OPT_CAMERA
+    OPT_CAMERA,
+    OPT_LOOK_FROM,
+    OPT_LOOK_AT,
+    OPT_UP,
+    OPT_FOV
 };
 
 static const struct option cli_longopts[] = {
@@ -174,6 +186,10 @@ static const struct option cli_longopts[] = {
     {"threads", required_argument, NULL, OPT_THREADS},
     {"crop", required_argument, NULL, OPT_CROP},
     {"camera", required_argument, NULL, OPT_CAMERA},
+    {"look-from", required_argument, NULL, OPT_LOOK_FROM},
+    {"look-at", required_argument, NULL, OPT_LOOK_AT},
+    {"up", required_argument, NULL, OPT_UP},
+    {"fov", required_argument, NULL, OPT_FOV},
     {"list-devices", no_argument, NULL, OPT_LIST},
     {"preview", no_argument, NULL, OPT_PREVIEW},
     {"preview-script", required_argument, NULL, OPT_PREVIEW_SCRIPT},
@@ -217,6 +233,33 @@ static int parse_crop(const char *s, render_settings *st)
     return -1;
 }
 
+/* X,Y,Z: three numbers of magnitude at most CW_MAX_ABS; a zero vector refused when
+ * nonzero is set. */
+static int parse_xyz(const char *opt, const char *s, int nonzero, double out[3])
+{
+    char buf[256], *p, *q;
+    int k;
+    if (strlen(s) < sizeof buf) {
+        memcpy(buf, s, strlen(s) + 1);
+        for (k = 0, p = buf; k < 3; k++, p = q + 1) {
+            q = strchr(p, ',');
+            if ((q == NULL) != (k == 2))
+                break;
+            if (q)
+                *q = '\0';
+            if (cli_parse_double(p, -CW_MAX_ABS, CW_MAX_ABS, &out[k]) != 0)
+                break;
+        }
+        if (k == 3 && (!nonzero || out[0] != 0 || out[1] != 0 || out[2] != 0))
+            return 0;
+    }
+    fprintf(stderr,
+            "clwhitted: %s expects X,Y,Z: three numbers of magnitude at most %g%s, got "
+            "'%s'\n" CLI_HINT,
+            opt, CW_MAX_ABS, nonzero ? ", not all zero" : "", shown(s));
+    return -1;
+}
+
 /* One option; returns 0, or -1 after printing a usage error. */
 static int parse_option(int c, const char *arg, cli_options *o)
 {
@@ -250,6 +293,39 @@ static int parse_option(int c, const char *arg, cli_options *o)
         return 0;
     case OPT_CAMERA:
         o->camera = arg;
+        return 0;
+    case OPT_LOOK_FROM:
+    case OPT_LOOK_AT:
+    case OPT_UP: {
+        double v[3];
+        const char *name = c == OPT_LOOK_FROM ? "--look-from"
+                           : c == OPT_LOOK_AT ? "--look-at"
+                                              : "--up";
+        if (parse_xyz(name, arg, c == OPT_UP, v) != 0)
+            return -1;
+        if (c == OPT_LOOK_FROM) {
+            o->view.has_eye = 1;
+            o->view.eye = vec3d_make(v[0], v[1], v[2]);
+        } else if (c == OPT_LOOK_AT) {
+            o->view.has_at = 1;
+            o->view.at = vec3d_make(v[0], v[1], v[2]);
+        } else {
+            o->view.has_up = 1;
+            o->view.up = vec3f_make((float)v[0], (float)v[1], (float)v[2]);
+        }
+        return 0;
+    }
+    case OPT_FOV:
+        if (parse_double("--fov", arg, 0, 180, &o->view.fov_deg) != 0)
+            return -1;
+        if (!((float)o->view.fov_deg > 0 && (float)o->view.fov_deg < 180)) {
+            fprintf(stderr,
+                    "clwhitted: --fov expects degrees strictly between 0 and 180, got "
+                    "'%s'\n" CLI_HINT,
+                    shown(arg));
+            return -1;
+        }
+        o->view.has_fov = 1;
         return 0;
     case OPT_PRECISION:
         if (strcmp(arg, "robust") == 0)

@@ -5,6 +5,7 @@
 
 #include "image.h"
 #include "render.h"
+#include "scene_load.h"
 
 typedef struct {
     const char *scene;          /* the first scene file */
@@ -23,6 +24,7 @@ typedef struct {
     int preview;                /* --preview or --preview-script */
     const char *preview_script; /* --preview-script FILE, or NULL */
     const char *camera;         /* --camera FILE (a camera file, as the preview writes), or NULL */
+    scene_view view;            /* --look-from, --look-at, --up, --fov (after --camera) */
     render_settings settings;   /* --spp, --precision, --spd, --stats, --crop, --kernel */
     image_write_opts write;     /* --exposure, --tonemap, --half, --png16 (metadata: main) */
 } cli_options;

@@ -62,11 +62,8 @@ typedef struct {
  * Returns 0, or -1 with err. */
 static int load_scene(const cli_options *o, const char *path, scene *s, char *err, size_t errlen)
 {
-    if (scene_load(path, s, err, errlen) != 0 ||
-        (o->camera && scene_load_camera(o->camera, s, err, errlen) != 0) ||
-        scene_finish(s, o->width, o->height, o->depth, err, errlen) != 0)
-        return -1;
-    return 0;
+    return scene_load_for_render(path, o->camera, &o->view, o->width, o->height, o->depth, s, err,
+                                 errlen);
 }
 
 static void *scene_job_main(void *arg)

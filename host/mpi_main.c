@@ -77,9 +77,8 @@ static int setup(job *j, setup_report *rep)
         if (sys_check_output(j->output, err, errlen) != 0)
             return -1;
     }
-    if (scene_load(o->scene, &j->s, err, errlen) != 0 ||
-        (o->camera && scene_load_camera(o->camera, &j->s, err, errlen) != 0) ||
-        scene_finish(&j->s, o->width, o->height, o->depth, err, errlen) != 0 ||
+    if (scene_load_for_render(o->scene, o->camera, &o->view, o->width, o->height, o->depth, &j->s,
+                              err, errlen) != 0 ||
         (!j->r && renderer_create(&j->r, device_spec(o->device, j->local_rank, spec, sizeof spec),
                                   err, errlen) != 0) ||
         renderer_set_settings(j->r, &o->settings, err, errlen) != 0 ||

@@ -209,3 +209,19 @@ int scene_camera_basis(scene_camera *c, vec3f view, vec3f up)
     c->v = vec3f_cross(w, u);
     return 0;
 }
+
+vec3f scene_camera_world_up(const scene_camera *c)
+{
+    static const vec3f axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    vec3f best = c->v;
+    float best_dv = 0.05f; /* cos 87 degrees */
+    int i;
+    for (i = 0; i < 3; i++) {
+        float du = vec3f_dot(axes[i], c->u), dv = vec3f_dot(axes[i], c->v);
+        if (fabsf(du) < 1e-4f && fabsf(dv) > best_dv) {
+            best_dv = fabsf(dv);
+            best = dv > 0 ? axes[i] : vec3f_make(-axes[i].x, -axes[i].y, -axes[i].z);
+        }
+    }
+    return best;
+}

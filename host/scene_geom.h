@@ -67,4 +67,10 @@ int scene_triangle_degenerate(const vec3f p[3]);
  * Returns -1 when the view is zero or up is parallel to it. */
 int scene_camera_basis(scene_camera *c, vec3f view, vec3f up);
 
+/* The world's up as far as a camera basis tells it (the readers keep no "up" vector,
+ * only that it lies in the v-w plane): of the X, Y, Z axes perpendicular to u, the one
+ * nearest v (signed towards it) if within 87 degrees of it, else v itself. The preview
+ * orbits about it; --look-from and --look-at without --up keep it. */
+vec3f scene_camera_world_up(const scene_camera *c);
+
 #endif

@@ -1,10 +1,12 @@
-/* Loading a scene file: picks the reader by the extension. See scene_load.h. */
+/* Loading a scene file: picks the reader by the extension; the command line's changes to
+ * the camera. See scene_load.h. */
 #include "scene_load.h"
 
 #include <stdio.h>
 
 #include "mesh_import.h"
 #include "mesh_scene.h"
+#include "scene_geom.h"
 #include "scene_json.h"
 #include "scene_nff.h"
 #include "sys.h"
@@ -31,4 +33,53 @@ int scene_load(const char *path, scene *s, char *err, size_t errlen)
              ".glb or .stl mesh)",
              path);
     return -1;
+}
+
+int scene_apply_view(scene *s, const scene_view *v, char *err, size_t errlen)
+{
+    scene_camera *c = &s->camera, moved = s->camera;
+    vec3d eye = v->has_eye ? v->eye : c->eye;
+    vec3f view = vec3f_make(-c->w.x, -c->w.y, -c->w.z);
+    vec3f up = v->has_up ? v->up : scene_camera_world_up(c);
+    if (v->has_fov && c->projection != SCENE_PERSPECTIVE) {
+        snprintf(err, errlen, "--fov applies to a perspective camera; the scene's is %s",
+                 c->projection == SCENE_ORTHOGRAPHIC ? "orthographic" : "oblique");
+        return -1;
+    }
+    if (v->has_at) {
+        view = vec3d_diff(v->at, eye);
+        if (view.x == 0 && view.y == 0 && view.z == 0) {
+            snprintf(err, errlen,
+                     "the look-at point (%.9g, %.9g, %.9g) is the eye: no view direction", v->at.x,
+                     v->at.y, v->at.z);
+            return -1;
+        }
+    }
+    if ((v->has_at || v->has_up) && scene_camera_basis(&moved, view, up) != 0) {
+        snprintf(err, errlen, "%s (%g, %g, %g) is parallel to the view direction (%g, %g, %g)%s",
+                 v->has_up ? "--up" : "the scene's up", up.x, up.y, up.z, view.x, view.y, view.z,
+                 v->has_up ? "" : ": give --up");
+        return -1;
+    }
+    moved.eye = eye;
+    if (v->has_fov) {
+        moved.fov_deg = (float)v->fov_deg;
+        moved.nff_angle_deg = 0.0f; /* the window follows from the field of view */
+    }
+    *c = moved;
+    return 0;
+}
+
+int scene_load_for_render(const char *path, const char *camera_file, const scene_view *view,
+                          int width, int height, int depth, scene *s, char *err, size_t errlen)
+{
+    char why[512];
+    if (scene_load(path, s, err, errlen) != 0 ||
+        (camera_file && scene_load_camera(camera_file, s, err, errlen) != 0))
+        return -1;
+    if (view && scene_apply_view(s, view, why, sizeof why) != 0) {
+        snprintf(err, errlen, "%s: the camera of the command line: %s", path, why);
+        return -1;
+    }
+    return scene_finish(s, width, height, depth, err, errlen);
 }

@@ -97,24 +97,6 @@ static int scene_bounds(const scene *s, vec3d *centre, float *diag)
     return 1;
 }
 
-/* World up: of the X, Y, Z axes perpendicular to u (so that orbiting keeps the horizon
- * level), the one nearest v, signed towards v, if within 87 degrees of it; else v. */
-static vec3f world_up(const scene_camera *c)
-{
-    static const vec3f axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    vec3f best = c->v;
-    float best_dv = 0.05f; /* cos 87 degrees */
-    int i;
-    for (i = 0; i < 3; i++) {
-        float du = vec3f_dot(axes[i], c->u), dv = vec3f_dot(axes[i], c->v);
-        if (fabsf(du) < 1e-4f && fabsf(dv) > best_dv) {
-            best_dv = fabsf(dv);
-            best = dv > 0 ? axes[i] : scale(axes[i], -1.0f);
-        }
-    }
-    return best;
-}
-
 void viewcam_init(viewcam *vc, const scene *s)
 {
     const scene_camera *c = &s->camera;
@@ -133,7 +115,7 @@ void viewcam_init(viewcam *vc, const scene *s)
     vc->height = s->height;
     vc->dist = dist;
     vc->pivot = vec3d_add_scaled(c->eye, view, dist);
-    vc->up = world_up(c);
+    vc->up = scene_camera_world_up(c);
     if (c->projection == SCENE_OBLIQUE)
         vc->dir_cam =
             vec3f_make(vec3f_dot(c->dir, c->u), vec3f_dot(c->dir, c->v), vec3f_dot(c->dir, c->w));

@@ -31,9 +31,9 @@ typedef struct {
  * readers keep only the basis), so the pivot is the point on the view axis nearest the
  * centre of the scene's bounding box (at least 1e-3 of the box size in front of the eye).
  * The "up" vector is lost too (u = up x w keeps only that it lies in the v-w plane), so
- * world up, the orbit axis, is: of the X, Y, Z axes perpendicular to u, the one nearest v
- * (signed towards it) if within 87 degrees of it, else v itself. A scene whose "up" is an
- * axis thus orbits with a level horizon (unless it looks down more steeply than 45 degrees
+ * world up, the orbit axis (scene_camera_world_up), is: of the X, Y, Z axes perpendicular to u, the
+ * one nearest v (signed towards it) if within 87 degrees of it, else v itself. A scene whose "up"
+ * is an axis thus orbits with a level horizon (unless it looks down more steeply than 45 degrees
  * with u along an axis, where the other axis is nearer v). */
 void viewcam_init(viewcam *vc, const scene *s);
 

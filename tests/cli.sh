@@ -225,6 +225,51 @@ check_grep "bad camera file: file:line" "badcam.json:2: camera file: unknown key
 "$BIN" --camera "$T/cam.nff" -o "$T/bc.png" scenes/default.json >"$T/out" 2>"$T/err"; check "camera file not JSON" 1 $?
 check_grep "camera file not JSON: message" "a camera file is JSON" "$T/err"
 
+# --look-from, --look-at, --up, --fov: the camera of the command line, after the scene and
+# --camera, for NFF and JSON scenes alike: the same pixels as a scene file with that camera
+R=tests/scenes/inside
+sed 's/"camera": .*/"camera": {"eye": [1, 2, 4], "look_at": [0, 0.5, 0], "up": [1, 1, 0], "fov": 50},/' \
+    "$R/room.json" >"$T/room-cam.json"
+"$BIN" -q -o "$T/cam-file.exr" "$T/room-cam.json" >"$T/out" 2>"$T/err"; check "room with another camera" 0 $?
+"$IMGTOOL" raw "$T/cam-file.exr" "$T/cam-file.raw" >/dev/null 2>&1
+for scene in "$R/room.nff" "$R/room.json"; do
+    "$BIN" -q -o "$T/cam-cli.exr" --camera "$T/cam.json" --look-from 1,2,4 --look-at 0,0.5,0 \
+        --up 1,1,0 --fov 50 -W 64 -H 48 -d 5 "$scene" >"$T/out" 2>"$T/err"
+    check "camera overrides on $scene" 0 $?
+    "$IMGTOOL" raw "$T/cam-cli.exr" "$T/cam-cli.raw" >/dev/null 2>&1
+    check_true "camera overrides on $scene: the pixels of the scene with that camera" \
+        cmp -s "$T/cam-cli.raw" "$T/cam-file.raw"
+done
+# --look-from alone keeps the view direction (0, -0.5, -3) of room.nff, moved back along it
+sed 's/"camera": .*/"camera": {"eye": [0, 2, 9], "look_at": [0, 1.5, 6], "up": [0, 1, 0], "angle": 60},/' \
+    "$R/room.json" >"$T/room-back.json"
+"$BIN" -q -o "$T/back-file.exr" "$T/room-back.json" >"$T/out" 2>"$T/err"; check "room seen from further back" 0 $?
+"$BIN" -q -o "$T/back-cli.exr" --look-from 0,2,9 "$R/room.nff" >"$T/out" 2>"$T/err"
+check "--look-from alone" 0 $?
+"$IMGTOOL" raw "$T/back-file.exr" "$T/a.raw" >/dev/null 2>&1; "$IMGTOOL" raw "$T/back-cli.exr" "$T/b.raw" >/dev/null 2>&1
+check_true "--look-from alone: the view direction kept" cmp -s "$T/a.raw" "$T/b.raw"
+check_true "--look-from alone: another picture" sh -c "! cmp -s '$T/a.raw' '$T/cam-file.raw'"
+# bad values: usage errors (exit 2, one line and the hint, nothing rendered)
+for bad in "--look-from 1,2" "--look-from 1,2,3,4" "--look-at a,b,c" "--look-at 1,,2" "--up 0,0,0" \
+    "--up 1,2,1e19" "--fov 0" "--fov 180" "--fov -5" "--fov wide"; do
+    # shellcheck disable=SC2086
+    "$BIN" -o "$T/bad-view.png" $bad "$R/room.nff" >"$T/out" 2>"$T/err"; check "usage error: $bad" 2 $?
+    check_grep "usage error: $bad: the option named" "^clwhitted: ${bad%% *} expects" "$T/err"
+    check_true "usage error: $bad: one line and the hint" test "$(wc -l <"$T/err")" -eq 2
+done
+check_true "usage errors: no image" test ! -e "$T/bad-view.png"
+# a degenerate view: a scene error (exit 1) naming the scene, for either program
+for bad in "--look-at 0,1,3" "--look-from 1,1,1 --look-at 1,1,1" "--look-at 0,1,-5 --up 0,0,1" \
+    "--look-at 0,5,3"; do
+    # shellcheck disable=SC2086
+    "$BIN" -o "$T/bad-view.png" $bad "$R/room.nff" >"$T/out" 2>"$T/err"; check "degenerate view: $bad" 1 $?
+    check_grep "degenerate view: $bad: the scene named" "^clwhitted: $R/room.nff: the camera of the command line: " "$T/err"
+done
+check_grep "the scene's up, parallel: the hint" "give --up" "$T/err"
+"$BIN" -o "$T/bad-view.png" --fov 30 scenes/orthographic.json >"$T/out" 2>"$T/err"; check "--fov on an orthographic camera" 1 $?
+check_grep "--fov on an orthographic camera: message" "perspective camera; the scene's is orthographic" "$T/err"
+check_true "degenerate views: no image" test ! -e "$T/bad-view.png"
+
 # the log progress mode: plain lines, no carriage returns (one every 5 s: a short render
 # prints none, so only their form is checked here; tests/test_progress.c checks the lines)
 CLWHITTED_PROGRESS=log "$BIN" -W 16 -H 12 -o "$T/log.png" scenes/default.json >"$T/out" 2>"$T/err"

@@ -85,7 +85,7 @@ spp4 scenes/default.json exr 3 -W 64 -H 48 --spp 4
 spd scenes/spd/tetra.nff exr 4 -W 64 -H 64 --spd
 spd-png scenes/oblique.json png 2 -W 48 -H 40 --spd
 fast scenes/orthographic.json exr 6 -W 80 -H 60 --precision fast
-camera scenes/spd/tetra.nff exr 4 --camera $T/cam.json
+camera scenes/spd/tetra.nff exr 4 --camera $T/cam.json --look-from 1.5,2,3.5 --fov 35
 CASES
 
 # The comparison can fail: another depth gives other pixels.
