@@ -241,7 +241,7 @@ static int parse_xyz(const char *opt, const char *s, int nonzero, double out[3])
     int k;
     if (strlen(s) < sizeof buf) {
         memcpy(buf, s, strlen(s) + 1);
-        for (k = 0, p = buf; k < 3; k++, p = q + 1) {
+        for (k = 0, p = buf; k < 3; k++) {
             q = strchr(p, ',');
             if ((q == NULL) != (k == 2))
                 break;
@@ -249,6 +249,8 @@ static int parse_xyz(const char *opt, const char *s, int nonzero, double out[3])
                 *q = '\0';
             if (cli_parse_double(p, -CW_MAX_ABS, CW_MAX_ABS, &out[k]) != 0)
                 break;
+            if (q)
+                p = q + 1;
         }
         if (k == 3 && (!nonzero || out[0] != 0 || out[1] != 0 || out[2] != 0))
             return 0;
