@@ -127,6 +127,7 @@ test: deps-dev $(BUILD)/clwhitted $(TEST_BIN)
 	done; \
 	sh tests/cli.sh $(BUILD)/clwhitted || fail=1; \
 	sh tests/safety.sh $(BUILD) || fail=1; \
+	sh tests/instances.sh $(BUILD) || fail=1; \
 	sh tests/build.sh $(BUILD) || fail=1; \
 	sh tests/install.sh || fail=1; \
 	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \

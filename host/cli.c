@@ -65,6 +65,9 @@ static void usage(FILE *f)
 "                        whole ray tree) or wavefront (a launch per ray depth);\n"
 "                        the image is the same (default: auto, pixel on CPU\n"
 "                        devices and wavefront on others)\n"
+"      --flatten         copy each placement of a mesh into the scene's own\n"
+"                        triangles rather than placing one copy (more memory;\n"
+"                        for comparison) (default: off)\n"
 "      --threads N       CPU threads, 1.." STR(CW_MAX_THREADS) ": PoCL's device, the BVH build and\n"
 "                        the image writers (default: one a core)\n"
 "\n"
@@ -165,7 +168,8 @@ enum {
     OPT_LOOK_FROM,
     OPT_LOOK_AT,
     OPT_UP,
-    OPT_FOV
+    OPT_FOV,
+    OPT_FLATTEN
 };
 
 static const struct option cli_longopts[] = {
@@ -190,6 +194,7 @@ static const struct option cli_longopts[] = {
     {"look-at", required_argument, NULL, OPT_LOOK_AT},
     {"up", required_argument, NULL, OPT_UP},
     {"fov", required_argument, NULL, OPT_FOV},
+    {"flatten", no_argument, NULL, OPT_FLATTEN},
     {"list-devices", no_argument, NULL, OPT_LIST},
     {"preview", no_argument, NULL, OPT_PREVIEW},
     {"preview-script", required_argument, NULL, OPT_PREVIEW_SCRIPT},
@@ -295,6 +300,9 @@ static int parse_option(int c, const char *arg, cli_options *o)
         return 0;
     case OPT_CAMERA:
         o->camera = arg;
+        return 0;
+    case OPT_FLATTEN:
+        o->view.flatten = 1;
         return 0;
     case OPT_LOOK_FROM:
     case OPT_LOOK_AT:

@@ -73,14 +73,19 @@ int mesh_scene_load(const char *path, scene *s, char *err, size_t errlen)
     s->background = vec3f_make(0.08f, 0.09f, 0.11f);
     s->ambient = vec3f_make(0.15f, 0.15f, 0.15f);
     frame_camera(s, lo, hi);
-    if (info.degenerate > 0)
+    mesh_scene_warn(path, &info);
+    return 0;
+}
+
+void mesh_scene_warn(const char *path, const mesh_import_info *info)
+{
+    if (info->degenerate > 0)
         fprintf(stderr, "clwhitted: warning: %s: %zu degenerate triangle%s left out\n", path,
-                info.degenerate, info.degenerate == 1 ? "" : "s");
-    if (info.textured > 0)
+                info->degenerate, info->degenerate == 1 ? "" : "s");
+    if (info->textured > 0)
         fprintf(stderr,
                 "clwhitted: warning: %s: textures are not part of the model; %d textured "
                 "material%s drawn in %s base colour\n",
-                path, info.textured, info.textured == 1 ? "" : "s",
-                info.textured == 1 ? "its" : "their");
-    return 0;
+                path, info->textured, info->textured == 1 ? "" : "s",
+                info->textured == 1 ? "its" : "their");
 }

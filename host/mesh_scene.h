@@ -6,7 +6,12 @@
 
 #include <stddef.h>
 
+#include "mesh_import.h"
 #include "scene.h"
+
+/* The warnings of an import (degenerate triangles left out, textures ignored) on stderr,
+ * once per file. */
+void mesh_scene_warn(const char *path, const mesh_import_info *info);
 
 /* Loads path as a scene. Returns 0, or -1 with "path: message" in err. */
 int mesh_scene_load(const char *path, scene *s, char *err, size_t errlen);

@@ -48,6 +48,13 @@ typedef struct {
     int camera_only; /* a camera file (--camera): "image", "max_depth" and "camera" only */
 } jreader;
 
+static json_mesh_reader mesh_reader; /* json_set_mesh_reader */
+
+void json_set_mesh_reader(json_mesh_reader fn)
+{
+    mesh_reader = fn;
+}
+
 /* ---- sections ------------------------------------------------------------------------------ */
 
 static int read_image(const jreader *r, const cJSON *img)
@@ -357,17 +364,22 @@ static int read_scene(jreader *r, const cJSON *root)
         return -1;
     if ((m = jv_member(root, "objects"))) {
         const cJSON *o;
-        int i = 0;
+        int i = 0, rc = 0;
         jo_reader objs;
+        jo_mesh_files files;
+        memset(&files, 0, sizeof files);
         objs.doc = &r->doc;
         objs.s = s;
         objs.mats = r->mats;
         objs.nmats = r->nmats;
+        objs.files = &files;
+        objs.read_mesh = mesh_reader;
         if (!cJSON_IsArray(m))
             return jv_fail(&r->doc, m, "objects: expected an array, found %s", jv_type_name(m));
-        for (o = m->child; o; o = o->next, i++)
-            if (jo_read_object(&objs, o, i) != 0)
-                return -1;
+        for (o = m->child; o && rc == 0; o = o->next, i++)
+            rc = jo_read_object(&objs, o, i);
+        jo_mesh_files_free(&files);
+        return rc;
     }
     return 0;
 }

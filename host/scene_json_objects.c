@@ -6,20 +6,26 @@
  *   {"type": "polygon", "vertices": >= 3 planar points, "normals" (optional), "material"}
  *   {"type": "cone", "base", "base_radius" (>= 0), "apex", "apex_radius" (>= 0), "material"}
  *   {"type": "cylinder", "base", "apex", "radius" (> 0), "material"}
+ *   {"type": "mesh", "file", "transform" (optional), "material" (optional)}
  *
  * "inside": true makes a sphere visible from inside only (NFF's negative radius, stored
  * as one). A polygon with normals is a smooth patch (NFF's pp): the fan of smooth
  * triangles (v0, vi, vi+1). */
 #include "scene_json_objects.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "config.h"
 #include "scene_geom.h"
 #include "scene_io.h"
+#include "scene_json_xform.h"
+#include "scene_mesh.h"
+#include "xform.h"
 
 int jo_material_cmp(const void *a, const void *b)
 {
@@ -257,6 +263,95 @@ free_pts:
     return rc;
 }
 
+void jo_mesh_files_free(jo_mesh_files *f)
+{
+    free(f->id);
+    free(f->mesh);
+    memset(f, 0, sizeof *f);
+}
+
+/* file relative to the folder of the scene file `scene_path` (as it is when absolute, or
+ * when the scene has no folder); malloc'd, NULL when out of memory. */
+static char *beside(const char *scene_path, const char *file)
+{
+    const char *slash = strrchr(scene_path, '/');
+    size_t dir = file[0] == '/' || !slash ? 0 : (size_t)(slash - scene_path) + 1;
+    char *p = malloc(dir + strlen(file) + 1);
+    if (p) {
+        memcpy(p, scene_path, dir);
+        strcpy(p + dir, file);
+    }
+    return p;
+}
+
+/* A mesh file placed in the scene: read once (the same file again is another placement of
+ * the same mesh: an instance, not a copy), placed with its transform and, when given, every
+ * triangle's material overridden. */
+static int read_mesh(const jo_reader *r, const cJSON *o, const char *path)
+{
+    const cJSON *f = jv_need(r->doc, o, path, "file"), *t, *m;
+    const char *file;
+    char *full, why[1024], shown[SCENE_SHOWN_LEN];
+    int mesh = -1, material = -1;
+    size_t k;
+    scene_xform x;
+    struct stat st;
+    if (!f)
+        return -1;
+    if (!(file = cJSON_GetStringValue(f)) || !*file)
+        return jv_fail(r->doc, f, "%s.file: expected the name of a mesh file, found %s", path,
+                       cJSON_IsString(f) ? "an empty string" : jv_type_name(f));
+    xform_identity(&x);
+    if ((t = jv_member(o, "transform"))) {
+        char tpath[80];
+        snprintf(tpath, sizeof tpath, "%s.transform", path);
+        if (jx_transform(r->doc, t, tpath, &x) != 0)
+            return -1;
+    }
+    if ((m = jv_member(o, "material")) && (material = jo_find_material(r, o, path)) < 0)
+        return -1;
+    if (!r->read_mesh)
+        return jv_fail(r->doc, f, "%s.file: mesh files cannot be read here", path);
+    if (!(full = beside(r->doc->msg->name, file)))
+        return jv_oom(r->doc, f);
+    if (stat(full, &st) != 0) {
+        int e = errno;
+        free(full);
+        return jv_fail(r->doc, f, "%s.file \"%s\": %s", path, scene_shown(file, shown),
+                       strerror(e));
+    }
+    for (k = 0; k < r->files->count; k++)
+        if (r->files->id[2 * k] == (unsigned long long)st.st_dev &&
+            r->files->id[2 * k + 1] == (unsigned long long)st.st_ino) {
+            mesh = r->files->mesh[k];
+            break;
+        }
+    if (mesh < 0) {
+        unsigned long long *ni = realloc(r->files->id, 2 * (r->files->count + 1) * sizeof *ni);
+        int *nm = ni ? realloc(r->files->mesh, (r->files->count + 1) * sizeof *nm) : NULL;
+        if (ni)
+            r->files->id = ni;
+        if (nm)
+            r->files->mesh = nm;
+        if (!ni || !nm) {
+            free(full);
+            return jv_oom(r->doc, f);
+        }
+        if (r->read_mesh(full, r->s, &mesh, why, sizeof why) != 0) {
+            free(full);
+            return jv_fail(r->doc, f, "%s.file \"%s\": %s", path, scene_shown(file, shown), why);
+        }
+        r->files->id[2 * r->files->count] = (unsigned long long)st.st_dev;
+        r->files->id[2 * r->files->count + 1] = (unsigned long long)st.st_ino;
+        r->files->mesh[r->files->count] = mesh;
+        r->files->count++;
+    }
+    free(full);
+    if (scene_place_mesh(r->s, mesh, &x, material) < 0)
+        return jv_oom(r->doc, o);
+    return 0;
+}
+
 int jo_read_object(const jo_reader *r, const cJSON *o, int i)
 {
     static const char *const sphere_keys[] = {"type",   "center",   "radius",
@@ -265,14 +360,12 @@ int jo_read_object(const jo_reader *r, const cJSON *o, int i)
     static const char *const cone_keys[] = {"type",        "base",     "base_radius", "apex",
                                             "apex_radius", "material", NULL};
     static const char *const cylinder_keys[] = {"type", "base", "apex", "radius", "material", NULL};
+    static const char *const mesh_keys[] = {"type", "file", "transform", "material", NULL};
     static const struct {
         const char *name;
         const char *const *keys;
-    } types[] = {{"sphere", sphere_keys},
-                 {"triangle", face_keys},
-                 {"polygon", face_keys},
-                 {"cone", cone_keys},
-                 {"cylinder", cylinder_keys}};
+    } types[] = {{"sphere", sphere_keys}, {"triangle", face_keys},     {"polygon", face_keys},
+                 {"cone", cone_keys},     {"cylinder", cylinder_keys}, {"mesh", mesh_keys}};
     char path[64], buf[SCENE_SHOWN_LEN];
     const cJSON *t;
     const char *type;
@@ -290,7 +383,7 @@ int jo_read_object(const jo_reader *r, const cJSON *o, int i)
     if (k == sizeof types / sizeof types[0])
         return jv_fail(r->doc, t,
                        "%s.type: unknown object type \"%s\" (expected \"sphere\", \"triangle\", "
-                       "\"polygon\", \"cone\" or \"cylinder\")",
+                       "\"polygon\", \"cone\", \"cylinder\" or \"mesh\")",
                        path, scene_shown(type, buf));
     if (jv_check_object(r->doc, o, path, types[k].keys) != 0)
         return -1;
@@ -300,6 +393,8 @@ int jo_read_object(const jo_reader *r, const cJSON *o, int i)
     case 1:
     case 2:
         return read_faces(r, o, path, k == 1);
+    case 5:
+        return read_mesh(r, o, path);
     default:
         return read_cone(r, o, path, k == 4);
     }

@@ -8,6 +8,7 @@
 #include "mesh_scene.h"
 #include "scene_geom.h"
 #include "scene_json.h"
+#include "scene_mesh.h"
 #include "scene_nff.h"
 #include "sys.h"
 
@@ -20,10 +21,22 @@ int scene_load_camera(const char *path, scene *s, char *err, size_t errlen)
     return json_camera_load(path, s, err, errlen);
 }
 
+/* A JSON scene's mesh files (json_set_mesh_reader): assimp's importer, and its warnings. */
+static int read_mesh(const char *path, scene *s, int *mesh, char *err, size_t errlen)
+{
+    mesh_import_info info;
+    if (mesh_import(path, s, mesh, &info, err, errlen) != 0)
+        return -1;
+    mesh_scene_warn(path, &info);
+    return 0;
+}
+
 int scene_load(const char *path, scene *s, char *err, size_t errlen)
 {
-    if (sys_has_ext(path, ".json"))
+    if (sys_has_ext(path, ".json")) {
+        json_set_mesh_reader(read_mesh);
         return json_scene_load(path, s, err, errlen);
+    }
     if (sys_has_ext(path, ".nff"))
         return nff_load(path, s, err, errlen);
     if (mesh_is_mesh_file(path))
@@ -79,6 +92,10 @@ int scene_load_for_render(const char *path, const char *camera_file, const scene
         return -1;
     if (view && scene_apply_view(s, view, why, sizeof why) != 0) {
         snprintf(err, errlen, "%s: the camera of the command line: %s", path, why);
+        return -1;
+    }
+    if (view && view->flatten && scene_flatten_instances(s, 1, why, sizeof why) != 0) {
+        snprintf(err, errlen, "%s: %s", path, why);
         return -1;
     }
     return scene_finish(s, width, height, depth, err, errlen);

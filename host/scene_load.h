@@ -16,12 +16,14 @@ int scene_load(const char *path, scene *s, char *err, size_t errlen);
  * with "file:line: message" in err. */
 int scene_load_camera(const char *path, scene *s, char *err, size_t errlen);
 
-/* The camera changes of the command line (--look-from, --look-at, --up, --fov). */
+/* The camera changes of the command line (--look-from, --look-at, --up, --fov), and
+ * --flatten. */
 typedef struct {
     int has_eye, has_at, has_up, has_fov; /* which were given */
     vec3d eye, at;                        /* the eye and the point it looks at */
     vec3f up;                             /* not zero */
     double fov_deg;                       /* the vertical field of view, 0 < fov < 180 */
+    int flatten; /* every placed mesh copied into world triangles (no instances) */
 } scene_view;
 
 /* Applies v to a loaded scene's camera (before scene_finish): the eye moves to v->eye;
@@ -33,8 +35,9 @@ typedef struct {
 int scene_apply_view(scene *s, const scene_view *v, char *err, size_t errlen);
 
 /* What clwhitted and clwhitted-mpi do with a scene file: scene_load, then the camera file
- * (camera_file; NULL: none), then the view (NULL: none), then scene_finish at the given
- * size and depth (0: the scene's own). Returns 0, or -1 with err. */
+ * (camera_file; NULL: none), then the view (NULL: none; with view->flatten, every instance
+ * flattened), then scene_finish at the given size and depth (0: the scene's own). Returns
+ * 0, or -1 with err. */
 int scene_load_for_render(const char *path, const char *camera_file, const scene_view *view,
                           int width, int height, int depth, scene *s, char *err, size_t errlen);
 

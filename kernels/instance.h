@@ -74,7 +74,23 @@ CW_INLINE cw_surface surface_instance(const cw_world *w, cw_hit hit, vec3 o, vec
     }
 #endif
     s.ng = inst_normal(in, s.ng);
-    s.ns = inst_normal(in, s.ns);
+    {
+        /* a smooth triangle: its vertex normals carried to the world one by one, then
+         * interpolated, as a flattened copy's are (carrying the interpolated normal
+         * instead weights the vertices differently under a non-uniform scale) */
+        CW_GLOBAL const cw_triangle *t = &w->triangles[hit.index];
+        if (t->normals >= 0) {
+            float b0 = 1.0f - hit.u - hit.v;
+            vec3 sn = v3_add(
+                v3_scale(inst_normal(in, v3_from4(w->normals[t->normals])), b0),
+                v3_add(v3_scale(inst_normal(in, v3_from4(w->normals[t->normals + 1])), hit.u),
+                       v3_scale(inst_normal(in, v3_from4(w->normals[t->normals + 2])), hit.v)));
+            float len = v3_len(sn);
+            s.ns = len > 0.0f ? v3_scale(sn, 1.0f / len) : s.ng;
+        } else {
+            s.ns = s.ng;
+        }
+    }
     if (in->material >= 0)
         s.material = in->material;
     return s;
