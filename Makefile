@@ -46,7 +46,7 @@ DEFAULT_SCENE := scenes/default.json
 DEPFLAGS = -MMD -MP
 
 .PHONY: all render test clean deps deps-runtime deps-dev format format-check install uninstall \
-        gallery bench spd-counts
+        gallery bench bench-instances spd-counts
 all: $(BUILD)/clwhitted $(BUILD)/scene2pov
 
 $(BUILD):
@@ -186,6 +186,10 @@ bench: $(BUILD)/clwhitted $(BUILD)/scene2pov \
 	    $(if $(filter 1,$(UPDATE_DOCS)),--update-docs docs/benchmarks.md)
 # tests/bench.sh runs POV-Ray through scene2pov, and the anchor where its source is here.
 test: $(BUILD)/scene2pov $(if $(wildcard $(ANCHOR_DIR)/embree_anchor.c),$(BUILD)/embree-anchor)
+
+# A mesh placed many times, instanced against flattened (docs/benchmarks.md, "Instances").
+bench-instances: $(BUILD)/clwhitted $(BUILD)/imgcmp
+	tools/bench-instances $(BENCH_INSTANCES_ARGS)
 
 # SPD ray counts against POV-Ray tracing the same corner rays.
 spd-counts: $(BUILD)/clwhitted $(BUILD)/scene2pov
