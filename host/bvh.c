@@ -182,7 +182,7 @@ int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int t
     cw_bvh_node *shrunk;
     sah_builder bd;
     sah_task root;
-    int *refs;
+    int *refs, *shrunk_refs;
     memset(out, 0, sizeof *out);
     memset(&bd, 0, sizeof bd);
     if (n < 0 || n > BVH_MAX_PRIMS) {
@@ -196,12 +196,9 @@ int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int t
     if (n == 0)
         return 0;
 
-    refs = malloc((size_t)n * sizeof *refs);
-    if (!refs)
-        goto out_oom;
     bd.nodes = malloc((size_t)(2 * n - 1) * sizeof *bd.nodes);
     if (!bd.nodes)
-        goto out_free_refs;
+        goto out_oom;
     bd.w = malloc((size_t)n * sizeof *bd.w);
     if (!bd.w)
         goto out_free_nodes;
@@ -225,9 +222,13 @@ int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int t
         free(bd.w);
         goto out_free_nodes;
     }
+    /* the leaf entries in place of the working array (entry i lies below prim i, read
+     * first), which is then cut to their size: no fresh memory to fault in */
+    refs = (int *)bd.w;
     for (int i = 0; i < n; i++)
         refs[i] = bd.w[i].idx;
-    free(bd.w);
+    shrunk_refs = realloc(refs, (size_t)n * sizeof *refs);
+    refs = shrunk_refs ? shrunk_refs : refs;
 
     shrunk = realloc(bd.nodes, (size_t)out->num_nodes * sizeof *bd.nodes);
     out->nodes = shrunk ? shrunk : bd.nodes;
@@ -237,8 +238,6 @@ int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int t
 
 out_free_nodes:
     free(bd.nodes);
-out_free_refs:
-    free(refs);
 out_oom:
     memset(out, 0, sizeof *out);
     snprintf(err, errlen, "bvh: out of memory for %d primitives", n);
@@ -278,6 +277,13 @@ static void set_lane(cw_bvhw_node *q, int i, const cw_bvh_node *n)
     }
 }
 
+/* The area by which collapse opens binary node i first: its box's, or -1 for a leaf (never
+ * opened). */
+static double slot_area(const cw_bvh_node *n2, int i)
+{
+    return n2[i].count <= 0 ? box_area(n2[i].lo, n2[i].hi) : -1.0;
+}
+
 /* Builds the wide node for binary node i2 at out->nodes[out->num_nodes++]; returns its
  * index and sets *need to the stack entries its subtree's traversal needs. The recursion
  * is as deep as the binary tree (at most BVH_MAX_DEPTH). */
@@ -289,21 +295,26 @@ static int collapse(const cw_bvh_node *n2, int i2, bvhw *out, int *need)
     if (n2[i2].count > 0) {
         slots[ns++] = i2;
     } else {
+        double area[CW_BVH_WIDTH]; /* of each interior slot; -1 for a leaf */
         slots[ns++] = i2 + 1;
         slots[ns++] = n2[i2].start;
+        area[0] = slot_area(n2, slots[0]);
+        area[1] = slot_area(n2, slots[1]);
         while (ns < CW_BVH_WIDTH) {
             int best = -1;
             double best_area = -1;
             for (i = 0; i < ns; i++)
-                if (n2[slots[i]].count <= 0 &&
-                    box_area(n2[slots[i]].lo, n2[slots[i]].hi) > best_area) {
+                if (area[i] > best_area) {
                     best = i;
-                    best_area = box_area(n2[slots[i]].lo, n2[slots[i]].hi);
+                    best_area = area[i];
                 }
             if (best < 0)
                 break;
-            slots[ns++] = n2[slots[best]].start;
+            slots[ns] = n2[slots[best]].start;
+            area[ns] = slot_area(n2, slots[ns]);
+            ns++;
             slots[best] = slots[best] + 1;
+            area[best] = slot_area(n2, slots[best]);
         }
     }
     for (i = 0; i < CW_BVH_WIDTH; i++) {

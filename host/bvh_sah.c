@@ -19,6 +19,9 @@
  * values, as one pass in order does), so the split is the one-thread split. */
 #include "bvh_sah.h"
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,11 +32,91 @@
 #define MAX_BINS 16           /* per axis; a node of fewer primitives gets as many bins as it has */
 #define PAR_BIN_MIN (1 << 14) /* primitives per thread when a top node is binned in parallel */
 
+/* v4_: four floats at once, lane 3 unused (zero), for the inner loops: SSE where the
+ * compiler has it, else plain C with the same results (min and max are the comparisons of
+ * box_grow, so NaN and signed zeros come out the same either way). */
+#ifdef __SSE2__
+typedef __m128 v4;
+static inline v4 v4_load3(const float *p) /* p[0..2]; p[3] is read, not used */
+{
+    return _mm_and_ps(_mm_loadu_ps(p), _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)));
+}
+static inline v4 v4_set(float x, float y, float z)
+{
+    return _mm_set_ps(0.0f, z, y, x);
+}
+static inline v4 v4_add(v4 a, v4 b)
+{
+    return _mm_add_ps(a, b);
+}
+static inline v4 v4_min(v4 a, v4 b)
+{
+    return _mm_min_ps(a, b);
+} /* a < b ? a : b */
+static inline v4 v4_max(v4 a, v4 b)
+{
+    return _mm_max_ps(a, b);
+} /* a > b ? a : b */
+static inline void v4_store(float *p, v4 a)
+{
+    _mm_storeu_ps(p, a);
+}
+/* The bins of a doubled centroid c on the three axes: bin_of lane by lane. */
+static inline void v4_bins(v4 c, v4 cmin, v4 scale, v4 last, int b[3])
+{
+    v4 f = _mm_mul_ps(_mm_sub_ps(c, cmin), scale);
+    __m128i k = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), last));
+    b[0] = _mm_cvtsi128_si32(k);
+    b[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(k, 1));
+    b[2] = _mm_cvtsi128_si32(_mm_shuffle_epi32(k, 2));
+}
+#else
 typedef struct {
-    float lo[3], hi[3];
-    int count;
-    int pad;
+    float v[4];
+} v4;
+static inline v4 v4_load3(const float *p)
+{
+    v4 r = {{p[0], p[1], p[2], 0.0f}};
+    return r;
+}
+static inline v4 v4_set(float x, float y, float z)
+{
+    v4 r = {{x, y, z, 0.0f}};
+    return r;
+}
+static inline v4 v4_add(v4 a, v4 b)
+{
+    for (int k = 0; k < 4; k++)
+        a.v[k] += b.v[k];
+    return a;
+}
+static inline v4 v4_min(v4 a, v4 b)
+{
+    for (int k = 0; k < 4; k++)
+        a.v[k] = a.v[k] < b.v[k] ? a.v[k] : b.v[k];
+    return a;
+}
+static inline v4 v4_max(v4 a, v4 b)
+{
+    for (int k = 0; k < 4; k++)
+        a.v[k] = a.v[k] > b.v[k] ? a.v[k] : b.v[k];
+    return a;
+}
+static inline void v4_store(float *p, v4 a)
+{
+    memcpy(p, a.v, sizeof a.v);
+}
+#endif
+
+/* One bin of each axis: the box of its primitives (lane 3 unused); the counts apart. */
+typedef struct {
+    float lo[4], hi[4];
 } bin;
+
+typedef struct {
+    bin box[3][MAX_BINS];
+    int count[3][MAX_BINS];
+} bins;
 
 _Static_assert(sizeof(sah_prim) == 32, "sah_prim is 32 bytes");
 
@@ -45,6 +128,14 @@ static inline int bin_of(float c, float cmin, float scale, float last)
     f = f < last ? f : last;
     return (int)f;
 }
+
+#ifndef __SSE2__
+static inline void v4_bins(v4 c, v4 cmin, v4 scale, v4 last, int b[3])
+{
+    for (int a = 0; a < 3; a++)
+        b[a] = bin_of(c.v[a], cmin.v[a], scale.v[a], last.v[a]);
+}
+#endif
 
 /* Sort key of a doubled centroid for median splits: a total order (NaN first). */
 static inline float centroid_key(const sah_prim *p, int axis)
@@ -104,21 +195,27 @@ static void select_nth(sah_prim *w, int begin, int end, int nth, int axis)
 
 /* Bins w[begin, end) by doubled centroid on each axis. */
 static void bin_range(const sah_prim *w, int begin, int end, const float clo[3],
-                      const float scale[3], int nb, bin bins[3][MAX_BINS])
+                      const float scale[3], int nb, bins *bn)
 {
     float last = (float)(nb - 1);
+    v4 vclo = v4_set(clo[0], clo[1], clo[2]), vscale = v4_set(scale[0], scale[1], scale[2]);
+    v4 vlast = v4_set(last, last, last);
     for (int a = 0; a < 3; a++) {
         for (int b = 0; b < nb; b++) {
-            box_empty(bins[a][b].lo, bins[a][b].hi);
-            bins[a][b].count = 0;
+            box_empty(bn->box[a][b].lo, bn->box[a][b].hi);
+            bn->box[a][b].lo[3] = bn->box[a][b].hi[3] = 0.0f;
+            bn->count[a][b] = 0;
         }
     }
     for (int i = begin; i < end; i++) {
-        const sah_prim *p = &w[i];
+        v4 lo = v4_load3(w[i].lo), hi = v4_load3(w[i].hi);
+        int k[3];
+        v4_bins(v4_add(lo, hi), vclo, vscale, vlast, k);
         for (int a = 0; a < 3; a++) {
-            bin *b = &bins[a][bin_of(p->lo[a] + p->hi[a], clo[a], scale[a], last)];
-            b->count++;
-            box_grow(b->lo, b->hi, p->lo, p->hi);
+            bin *b = &bn->box[a][k[a]];
+            v4_store(b->lo, v4_min(lo, v4_load3(b->lo)));
+            v4_store(b->hi, v4_max(hi, v4_load3(b->hi)));
+            bn->count[a][k[a]]++;
         }
     }
 }
@@ -128,20 +225,20 @@ typedef struct {
     const sah_prim *w;
     int begin, end, nb;
     const float *clo, *scale;
-    bin bins[3][MAX_BINS];
+    bins bn;
 } bin_part;
 
 static void *bin_part_run(void *arg)
 {
     bin_part *bp = arg;
-    bin_range(bp->w, bp->begin, bp->end, bp->clo, bp->scale, bp->nb, bp->bins);
+    bin_range(bp->w, bp->begin, bp->end, bp->clo, bp->scale, bp->nb, &bp->bn);
     return NULL;
 }
 
 /* bin_range on `threads` threads: each bins a range, and the bins are merged in range order,
  * so that every count, min and max is what one pass in order gives. */
 static void bin_parallel(const sah_prim *w, int begin, int end, const float clo[3],
-                         const float scale[3], int nb, int threads, bin bins[3][MAX_BINS])
+                         const float scale[3], int nb, int threads, bins *bn)
 {
     bin_part part[CW_BVH_MAX_THREADS];
     pthread_t tid[CW_BVH_MAX_THREADS];
@@ -156,7 +253,7 @@ static void bin_parallel(const sah_prim *w, int begin, int end, const float clo[
         bp->scale = scale;
         started[k] = pthread_create(&tid[k], NULL, bin_part_run, bp) == 0;
     }
-    bin_range(w, begin, begin + (int)((long long)n / threads), clo, scale, nb, bins);
+    bin_range(w, begin, begin + (int)((long long)n / threads), clo, scale, nb, bn);
     for (int k = 1; k < threads; k++) {
         if (started[k])
             pthread_join(tid[k], NULL);
@@ -164,9 +261,9 @@ static void bin_parallel(const sah_prim *w, int begin, int end, const float clo[
             bin_part_run(&part[k]); /* no thread: bin it here */
         for (int a = 0; a < 3; a++) {
             for (int b = 0; b < nb; b++) {
-                bins[a][b].count += part[k].bins[a][b].count;
-                box_grow(bins[a][b].lo, bins[a][b].hi, part[k].bins[a][b].lo,
-                         part[k].bins[a][b].hi);
+                bn->count[a][b] += part[k].bn.count[a][b];
+                box_grow(bn->box[a][b].lo, bn->box[a][b].hi, part[k].bn.box[a][b].lo,
+                         part[k].bn.box[a][b].hi);
             }
         }
     }
@@ -181,16 +278,16 @@ static double best_split(const sah_prim *w, int begin, int end, const float clo[
                          const float chi[3], double node_area, int nb, int threads, float scale[3],
                          int *axis, int *split)
 {
-    bin bins[3][MAX_BINS];
+    bins bn;
     double best = INFINITY;
     for (int a = 0; a < 3; a++) {
         float ext = chi[a] - clo[a];
         scale[a] = ext > 0.0f ? (float)nb / ext : 0.0f;
     }
     if (threads > 1)
-        bin_parallel(w, begin, end, clo, scale, nb, threads, bins);
+        bin_parallel(w, begin, end, clo, scale, nb, threads, &bn);
     else
-        bin_range(w, begin, end, clo, scale, nb, bins);
+        bin_range(w, begin, end, clo, scale, nb, &bn);
     for (int a = 0; a < 3; a++) {
         double right_area[MAX_BINS];
         int right_count[MAX_BINS];
@@ -200,20 +297,20 @@ static double best_split(const sah_prim *w, int begin, int end, const float clo[
             continue;
         box_empty(lo, hi);
         for (int b = nb - 1; b > 0; b--) {
-            count += bins[a][b].count;
+            count += bn.count[a][b];
             right_count[b] = count;
-            if (bins[a][b].count > 0)
-                box_grow(lo, hi, bins[a][b].lo, bins[a][b].hi);
+            if (bn.count[a][b] > 0)
+                box_grow(lo, hi, bn.box[a][b].lo, bn.box[a][b].hi);
             right_area[b] = count > 0 ? box_area(lo, hi) : 0.0;
         }
         box_empty(lo, hi);
         count = 0;
         for (int b = 1; b < nb; b++) {
             double cost;
-            if (bins[a][b - 1].count == 0)
+            if (bn.count[a][b - 1] == 0)
                 continue; /* the same split as the previous boundary */
-            box_grow(lo, hi, bins[a][b - 1].lo, bins[a][b - 1].hi);
-            count += bins[a][b - 1].count;
+            box_grow(lo, hi, bn.box[a][b - 1].lo, bn.box[a][b - 1].hi);
+            count += bn.count[a][b - 1];
             if (right_count[b] == 0)
                 break;
             cost = box_area(lo, hi) * count + right_area[b] * right_count[b];
@@ -229,28 +326,50 @@ static double best_split(const sah_prim *w, int begin, int end, const float clo[
     return C_TRAV + C_ISECT * best / node_area;
 }
 
-static void task_empty(sah_task *t)
+/* The bounds of a task while they grow: box and doubled-centroid box. */
+typedef struct {
+    v4 lo, hi, clo, chi;
+} bounds;
+
+static inline void bounds_empty(bounds *b)
 {
-    box_empty(t->lo, t->hi);
-    box_empty(t->clo, t->chi);
+    b->lo = b->clo = v4_set(INFINITY, INFINITY, INFINITY);
+    b->hi = b->chi = v4_set(-INFINITY, -INFINITY, -INFINITY);
 }
 
-static inline void task_grow(sah_task *t, const sah_prim *p)
+static inline void bounds_grow(bounds *b, const sah_prim *p)
 {
-    float c[3];
-    for (int a = 0; a < 3; a++)
-        c[a] = p->lo[a] + p->hi[a];
-    box_grow(t->lo, t->hi, p->lo, p->hi);
-    box_grow(t->clo, t->chi, c, c);
+    v4 lo = v4_load3(p->lo), hi = v4_load3(p->hi), c = v4_add(lo, hi);
+    b->lo = v4_min(lo, b->lo);
+    b->hi = v4_max(hi, b->hi);
+    b->clo = v4_min(c, b->clo);
+    b->chi = v4_max(c, b->chi);
+}
+
+static void bounds_to_task(const bounds *b, sah_task *t)
+{
+    float f[4][4];
+    v4_store(f[0], b->lo);
+    v4_store(f[1], b->hi);
+    v4_store(f[2], b->clo);
+    v4_store(f[3], b->chi);
+    for (int a = 0; a < 3; a++) {
+        t->lo[a] = f[0][a];
+        t->hi[a] = f[1][a];
+        t->clo[a] = f[2][a];
+        t->chi[a] = f[3][a];
+    }
 }
 
 void sah_task_range(sah_task *t, const sah_prim *w, int begin, int end)
 {
+    bounds b;
+    bounds_empty(&b);
+    for (int i = begin; i < end; i++)
+        bounds_grow(&b, &w[i]);
     t->begin = begin;
     t->end = end;
-    task_empty(t);
-    for (int i = begin; i < end; i++)
-        task_grow(t, &w[i]);
+    bounds_to_task(&b, t);
 }
 
 /* Moves the primitives of t's range in bins below split (along axis) to the front; sets
@@ -260,19 +379,22 @@ static void partition_bins(sah_prim *w, const sah_task *t, int axis, int split, 
 {
     int i = t->begin, j = t->end - 1;
     float cmin = t->clo[axis];
-    task_empty(left);
-    task_empty(right);
+    bounds l, r;
+    bounds_empty(&l);
+    bounds_empty(&r);
     for (;;) {
         while (i <= j && bin_of(w[i].lo[axis] + w[i].hi[axis], cmin, scale, last) < split)
-            task_grow(left, &w[i++]);
+            bounds_grow(&l, &w[i++]);
         while (i <= j && bin_of(w[j].lo[axis] + w[j].hi[axis], cmin, scale, last) >= split)
-            task_grow(right, &w[j--]);
+            bounds_grow(&r, &w[j--]);
         if (i >= j)
             break;
         swap_prims(&w[i], &w[j]);
-        task_grow(left, &w[i++]);
-        task_grow(right, &w[j--]);
+        bounds_grow(&l, &w[i++]);
+        bounds_grow(&r, &w[j--]);
     }
+    bounds_to_task(&l, left);
+    bounds_to_task(&r, right);
     left->begin = t->begin;
     left->end = right->begin = i;
     right->end = t->end;

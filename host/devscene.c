@@ -452,21 +452,25 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
                  ds->tree_wide.stack_need, CW_BVH_STACK);
         return -1;
     }
-    ds->refs = malloc(((size_t)ds->tree.num_refs + (size_t)ds->nmesh_box + 1) * sizeof *ds->refs);
-    if (!ds->refs) {
-        snprintf(err, errlen, "out of memory for the BVH");
-        return -1;
+    { /* the leaf entries become CW_REFs in place, with room for the meshes' after them */
+        size_t room = (size_t)ds->tree.num_refs + (size_t)ds->nmesh_box + 1;
+        int *grown;
+        for (i = 0; i < ds->tree.num_refs; i++)
+            ds->tree.refs[i] = ds->box_ref[ds->tree.refs[i]];
+        grown = realloc(ds->tree.refs, room * sizeof *ds->refs);
+        if (!grown) {
+            snprintf(err, errlen, "out of memory for the BVH");
+            return -1;
+        }
+        ds->refs = grown;
+        ds->tree.refs = NULL;
     }
-    for (i = 0; i < ds->tree.num_refs; i++)
-        ds->refs[i] = ds->box_ref[ds->tree.refs[i]];
     ds->nrefs = ds->tree.num_refs;
     /* only the kernels' arrays stay: the binary tree and the box map have served */
     free(ds->box_ref);
     ds->box_ref = NULL;
     free(ds->tree.nodes);
-    free(ds->tree.refs);
     ds->tree.nodes = NULL;
-    ds->tree.refs = NULL;
     if (devinst_build(ds, err, errlen) != 0)
         return -1;
     return pack_triangle_leaves(ds, err, errlen);
