@@ -895,6 +895,180 @@ static void test_threads_identical(void **state)
     free(b);
 }
 
+/* ======================================================================================== */
+/* The root split against a plain reference of the binned SAH                               */
+
+#define REF_BINS 16 /* bvh_sah.c's MAX_BINS */
+
+static void ref_grow(float lo[3], float hi[3], const float plo[3], const float phi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        lo[a] = plo[a] < lo[a] ? plo[a] : lo[a];
+        hi[a] = phi[a] > hi[a] ? phi[a] : hi[a];
+    }
+}
+
+static void ref_empty(float lo[3], float hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        lo[a] = INFINITY;
+        hi[a] = -INFINITY;
+    }
+}
+
+static double ref_area(const float lo[3], const float hi[3])
+{
+    double dx = (double)hi[0] - lo[0], dy = (double)hi[1] - lo[1], dz = (double)hi[2] - lo[2];
+    if (!(dx >= 0.0 && dy >= 0.0 && dz >= 0.0))
+        return 0.0;
+    return 2.0 * (dx * dy + dy * dz + dz * dx);
+}
+
+static int ref_bin(const bvh_box *b, int a, float cmin, float scale)
+{
+    float f = (b->lo[a] + b->hi[a] - cmin) * scale;
+    f = f > 0.0f ? f : 0.0f;
+    f = f < (float)(REF_BINS - 1) ? f : (float)(REF_BINS - 1);
+    return (int)f;
+}
+
+/* The root split of n >= REF_BINS boxes, one box and one comparison at a time, as the
+ * builder's documentation states it: doubled centroids binned on each axis, the cheapest
+ * boundary (first on ties, axes in order), the boxes of the two sides. Sets in_left[i]. */
+static void ref_root_split(const bvh_box *b, int n, int *axis, unsigned char *in_left,
+                           float llo[3], float lhi[3], float rlo[3], float rhi[3])
+{
+    float clo[3], chi[3], scale[3], lo[3], hi[3];
+    float blo[3][REF_BINS][3], bhi[3][REF_BINS][3];
+    int count[3][REF_BINS] = {{0}}, split = 0;
+    double best = INFINITY;
+    ref_empty(clo, chi);
+    for (int i = 0; i < n; i++) {
+        float c[3];
+        for (int a = 0; a < 3; a++)
+            c[a] = b[i].lo[a] + b[i].hi[a];
+        ref_grow(clo, chi, c, c);
+    }
+    for (int a = 0; a < 3; a++) {
+        scale[a] = chi[a] - clo[a] > 0.0f ? (float)REF_BINS / (chi[a] - clo[a]) : 0.0f;
+        for (int k = 0; k < REF_BINS; k++)
+            ref_empty(blo[a][k], bhi[a][k]);
+    }
+    for (int i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++) {
+            int k = ref_bin(&b[i], a, clo[a], scale[a]);
+            count[a][k]++;
+            ref_grow(blo[a][k], bhi[a][k], b[i].lo, b[i].hi);
+        }
+    for (int a = 0; a < 3; a++) {
+        double right_area[REF_BINS];
+        int right_count[REF_BINS], c = 0;
+        if (scale[a] == 0.0f)
+            continue;
+        ref_empty(lo, hi);
+        for (int k = REF_BINS - 1; k > 0; k--) {
+            c += count[a][k];
+            right_count[k] = c;
+            if (count[a][k] > 0)
+                ref_grow(lo, hi, blo[a][k], bhi[a][k]);
+            right_area[k] = c > 0 ? ref_area(lo, hi) : 0.0;
+        }
+        ref_empty(lo, hi);
+        c = 0;
+        for (int k = 1; k < REF_BINS; k++) {
+            double cost;
+            if (count[a][k - 1] == 0)
+                continue;
+            ref_grow(lo, hi, blo[a][k - 1], bhi[a][k - 1]);
+            c += count[a][k - 1];
+            if (right_count[k] == 0)
+                break;
+            cost = ref_area(lo, hi) * c + right_area[k] * right_count[k];
+            if (cost < best) {
+                best = cost;
+                *axis = a;
+                split = k;
+            }
+        }
+    }
+    assert_true(best < INFINITY);
+    ref_empty(llo, lhi);
+    ref_empty(rlo, rhi);
+    for (int i = 0; i < n; i++) {
+        in_left[i] = ref_bin(&b[i], *axis, clo[*axis], scale[*axis]) < split;
+        if (in_left[i])
+            ref_grow(llo, lhi, b[i].lo, b[i].hi);
+        else
+            ref_grow(rlo, rhi, b[i].lo, b[i].hi);
+    }
+}
+
+/* The number of primitives below node k of t. */
+static int subtree_count(const bvh *t, int k)
+{
+    if (t->nodes[k].count > 0)
+        return t->nodes[k].count;
+    return subtree_count(t, k + 1) + subtree_count(t, t->nodes[k].start);
+}
+
+/* The root's split axis, its children's boxes and the primitives below its first child must
+ * be the reference's, on one thread and on several (the root binned in parallel). The boxes
+ * are compared by value: which of +0 and -0 a box keeps depends on the order the partition
+ * visits its primitives in (test_threads_identical checks the bits across thread counts). */
+static void root_like_reference(const bvh_box *b, int n, const char *what)
+{
+    unsigned char *in_left = calloc((size_t)n, 1);
+    float llo[3], lhi[3], rlo[3], rhi[3];
+    int axis = -1;
+    assert_non_null(in_left);
+    ref_root_split(b, n, &axis, in_left, llo, lhi, rlo, rhi);
+    for (int threads = 1; threads <= 2; threads++) {
+        char err[256] = "";
+        bvh t;
+        const cw_bvh_node *l, *r;
+        int nl;
+        if (bvh_build_threads(&t, b, n, 4, threads, err, sizeof err) != 0)
+            fail_msg("%s: %s", what, err);
+        l = &t.nodes[1];
+        r = &t.nodes[t.nodes[0].start];
+        if (t.nodes[0].count != -axis || !box_equal(l->lo, l->hi, llo, lhi) ||
+            !box_equal(r->lo, r->hi, rlo, rhi))
+            fail_msg("%s, %d thread(s): the root's split (axis %d, first child [%g %g %g]-[%g %g "
+                     "%g]) is not the reference's (axis %d, [%g %g %g]-[%g %g %g])",
+                     what, threads, -t.nodes[0].count, l->lo[0], l->lo[1], l->lo[2], l->hi[0],
+                     l->hi[1], l->hi[2], axis, llo[0], llo[1], llo[2], lhi[0], lhi[1], lhi[2]);
+        nl = subtree_count(&t, 1);
+        for (int i = 0; i < t.num_refs; i++)
+            if ((i < nl) != in_left[t.refs[i]])
+                fail_msg("%s, %d thread(s): primitive %d is on the wrong side of the root", what,
+                         threads, t.refs[i]);
+        bvh_free(&t);
+    }
+    free(in_left);
+}
+
+static void test_root_split_reference(void **state)
+{
+    int n = 70000; /* above the parallel build's threshold */
+    bvh_box *b = random_boxes(n, 71, 100.0f, 2.0f);
+    (void)state;
+    root_like_reference(b, n, "uniform");
+    for (int i = 0; i < n; i++) { /* a flat cloud: +0 and -0 along y */
+        float z = (i % 3) ? 0.0f : -0.0f;
+        set_box(&b[i], rnd() * 10.0f, z, rnd() * 3.0f, 0.25f, 0.0f, 0.25f);
+        b[i].lo[1] = (i % 5) ? -0.0f : 0.0f;
+        b[i].hi[1] = z;
+    }
+    root_like_reference(b, n, "signed zeros");
+    tu_rng_seed(72);
+    for (int i = 0; i < n; i++) { /* two clusters far apart, of very different sizes */
+        float c = i % 9 == 0 ? 1000.0f : 0.0f, h = i % 9 == 0 ? 5.0f : 0.01f;
+        set_box(&b[i], c + rnd() * 20.0f, rnd() * 20.0f, rnd(), h, h * rnd(), h);
+    }
+    root_like_reference(b, n, "clusters");
+    free(b);
+}
+
 /* Walks the wide tree from node k: every lane's box must equal the binary node it came
  * from (checked through containment of what lies below), an empty lane's box must be
  * inverted (no ray enters it), every primitive must be reached once, and the stack a
@@ -1218,6 +1392,7 @@ int main(void)
         cmocka_unit_test(test_sah_quality),
         cmocka_unit_test(test_million_triangles),
         cmocka_unit_test(test_threads_identical),
+        cmocka_unit_test(test_root_split_reference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
