@@ -41,6 +41,10 @@
 #define CW_BVH_THREADS 0
 #define CW_BVH_MAX_THREADS 16
 
+/* Scene arrays larger than this are uploaded in pieces of this many bytes, each given back
+ * to the system once the device has it (render.c). */
+#define CW_UPLOAD_PIECE ((size_t)32 << 20)
+
 /* Rendering in bands of rows: the wavefront's ray queues, hits and shadow rays of a band
  * stay within CW_BAND_BYTES; the per-pixel kernel traces a band in launches of about
  * CW_PIXEL_LAUNCH_PIXELS pixels, each followed by the counters' read and a progress report. */

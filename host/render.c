@@ -204,9 +204,31 @@ int renderer_ensure_program(renderer *r, int strategy, char *err, size_t errlen)
 
 /* ---- scene upload ----------------------------------------------------------------- */
 
+/* Writes a big host array into buffer m a piece at a time, each piece's memory given back
+ * as soon as the device holds its copy (sys_release): the host copy and the device copy of
+ * a scene array are never both whole, so the peak memory of the upload is the scene's plus
+ * one piece rather than plus its largest array. */
+static int upload_pieces(renderer *r, cl_mem m, void *data, size_t bytes, const char *what,
+                         char *err, size_t errlen)
+{
+    for (size_t off = 0; off < bytes; off += CW_UPLOAD_PIECE) {
+        size_t len = bytes - off < CW_UPLOAD_PIECE ? bytes - off : CW_UPLOAD_PIECE;
+        cl_int e =
+            clEnqueueWriteBuffer(r->queue, m, CL_TRUE, off, len, (char *)data + off, 0, NULL, NULL);
+        if (e != CL_SUCCESS) {
+            char call[96];
+            snprintf(call, sizeof call, "clEnqueueWriteBuffer(%s, %zu bytes)", what, len);
+            return rpass_fail(e, call, r, err, errlen);
+        }
+        sys_release((char *)data + off, len);
+    }
+    return 0;
+}
+
 /* A read-only buffer holding a copy of count elements (at least one element is
- * allocated: OpenCL has no empty buffers). */
-static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t size,
+ * allocated: OpenCL has no empty buffers). A host array the caller frees right after
+ * (release) and larger than a piece is written in pieces (upload_pieces). */
+static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t size, int release,
                   const char *what, char *err, size_t errlen)
 {
     cl_int e;
@@ -229,15 +251,16 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
         free(zero);
         return -1;
     }
-    *m = clCreateBuffer(r->ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * size, (void *)data,
-                        &e);
+    release = release && count * size > CW_UPLOAD_PIECE;
+    *m = clCreateBuffer(r->ctx, CL_MEM_READ_ONLY | (release ? 0 : CL_MEM_COPY_HOST_PTR),
+                        count * size, release ? NULL : (void *)data, &e);
     free(zero);
     if (e != CL_SUCCESS) {
         char call[96];
         snprintf(call, sizeof call, "clCreateBuffer(%s, %zu bytes)", what, count * size);
         return rpass_fail(e, call, r, err, errlen);
     }
-    return 0;
+    return release ? upload_pieces(r, *m, (void *)data, count * size, what, err, errlen) : 0;
 }
 
 /* Uploads every buffer of CW_WORLD_BUFFERS in list order from the devscene's arrays (the
@@ -248,7 +271,7 @@ static int upload_world(renderer *r, devscene *ds, char *err, size_t errlen)
     devscene_world a;
     devscene_world_arrays(ds, &a);
 #define UPLOAD_WORLD(type, name, what)                                                             \
-    if (upload(r, &r->world.name, a.name, a.n_##name, sizeof(type), what, err, errlen))            \
+    if (upload(r, &r->world.name, a.name, a.n_##name, sizeof(type), 1, what, err, errlen))         \
         return -1;                                                                                 \
     devscene_free_array(ds, CW_WORLD_ARG_##name);
     CW_WORLD_BUFFERS(UPLOAD_WORLD)
@@ -324,11 +347,11 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     if (renderer_ensure_program(r, renderer_strategy(r), err, errlen) != 0)
         goto out_free;
     t0 = sys_now();
-    if (upload(r, &r->world.frame, f, 1, sizeof *f, "frame", err, errlen) ||
+    if (upload(r, &r->world.frame, f, 1, sizeof *f, 0, "frame", err, errlen) ||
         upload_world(r, &ds, err, errlen) ||
-        upload(r, &r->lights, ds.lights, s->lights.count, sizeof *ds.lights, "lights", err,
+        upload(r, &r->lights, ds.lights, s->lights.count, sizeof *ds.lights, 0, "lights", err,
                errlen) ||
-        upload(r, &r->materials, ds.mats, s->materials.count, sizeof *ds.mats, "materials", err,
+        upload(r, &r->materials, ds.mats, s->materials.count, sizeof *ds.mats, 0, "materials", err,
                errlen)) {
         release_scene(r);
         goto out_free;

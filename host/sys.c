@@ -15,6 +15,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdint.h>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <time.h>
@@ -67,6 +71,21 @@ unsigned long long sys_mem_available(void)
 #endif
     size = sysconf(_SC_PAGESIZE);
     return pages > 0 && size > 0 ? (unsigned long long)pages * (unsigned long long)size : 0;
+}
+
+void sys_release(void *p, size_t len)
+{
+#if defined(__linux__) && defined(MADV_DONTNEED)
+    long size = sysconf(_SC_PAGESIZE);
+    uintptr_t page = size > 0 ? (uintptr_t)size : 4096; /* whole pages inside the range */
+    uintptr_t lo = ((uintptr_t)p + page - 1) & ~(page - 1);
+    uintptr_t hi = ((uintptr_t)p + len) & ~(page - 1);
+    if (p && hi > lo)
+        (void)madvise((void *)lo, hi - lo, MADV_DONTNEED); /* errors ignored: advice only */
+#else
+    (void)p;
+    (void)len;
+#endif
 }
 
 int sys_cpu_count(void)

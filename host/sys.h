@@ -20,6 +20,12 @@ void sys_set_cpu_limit(int n);
  * else the free pages); 0 when unknown. */
 unsigned long long sys_mem_available(void);
 
+/* Gives the memory of [p, p + len), part of an allocation whose content is no longer
+ * needed, back to the system now (the whole pages inside it; Linux's MADV_DONTNEED): it
+ * stays allocated, reads as zeros, and is freed as usual. Advice only: elsewhere nothing
+ * happens. */
+void sys_release(void *p, size_t len);
+
 /* Ends the process now with status: flushes stdout and stderr, then _exit (no atexit
  * handlers or library destructors run, nothing is freed). */
 void sys_exit_now(int status);

@@ -935,8 +935,8 @@ static int ref_bin(const bvh_box *b, int a, float cmin, float scale)
 /* The root split of n >= REF_BINS boxes, one box and one comparison at a time, as the
  * builder's documentation states it: doubled centroids binned on each axis, the cheapest
  * boundary (first on ties, axes in order), the boxes of the two sides. Sets in_left[i]. */
-static void ref_root_split(const bvh_box *b, int n, int *axis, unsigned char *in_left,
-                           float llo[3], float lhi[3], float rlo[3], float rhi[3])
+static void ref_root_split(const bvh_box *b, int n, int *axis, unsigned char *in_left, float llo[3],
+                           float lhi[3], float rlo[3], float rhi[3])
 {
     float clo[3], chi[3], scale[3], lo[3], hi[3];
     float blo[3][REF_BINS][3], bhi[3][REF_BINS][3];
