@@ -1,7 +1,8 @@
 #!/bin/sh
-# tools/bench (make bench) and tools/gen-scene, small: the scene generator is deterministic
-# and writes what it is asked for; the bench runs end to end with --quick on one tiny
-# generated scene (32x32, 200 triangles) and prints every table; the Embree anchor
+# tools/bench (make bench), tools/gen-scene and tools/gen-mesh, small: the generators are
+# deterministic and write what they are asked for (the mesh's PLY read back); the bench runs
+# end to end with --quick on one tiny generated scene (32x32, 200 triangles) and prints
+# every table; the Embree anchor
 # (BUILD/embree-anchor) and POV-Ray take part when they are there; a missing anchor is a
 # clear message; make bench writes into tracked files only with UPDATE_DOCS=1. Times are not
 # checked (speed lives in the benchmark). Usage: tests/bench.sh BUILD (from the repository
@@ -40,6 +41,42 @@ check "clwhitted reads a generated scene" 0 $?
 tools/gen-scene --count 0 "$T/zero.nff" >"$T/log" 2>&1
 check "gen-scene --count 0" 2 $?
 check_true "the message says what a count is" has "is not a count from 1 to 100M"
+
+# The mesh generator: exactly N triangles, the same file for the same arguments, a PLY whose
+# sizes and indices hold together (a small reader below), and the same mesh as NFF.
+tools/gen-mesh --count 1001 "$T/mesh.ply" >"$T/log" 2>&1
+check "gen-mesh ply" 0 $?
+tools/gen-mesh --count 1001 "$T/again.ply" >"$T/log" 2>&1
+check_true "gen-mesh is deterministic" cmp -s "$T/mesh.ply" "$T/again.ply"
+tools/gen-mesh --count 1001 --seed 2 "$T/seed2.ply" >"$T/log" 2>&1
+check_true "another seed, another mesh" sh -c "! cmp -s '$T/mesh.ply' '$T/seed2.ply'"
+python3 - "$T/mesh.ply" 1001 >"$T/log" 2>&1 <<'PY'
+import struct, sys
+d = open(sys.argv[1], "rb").read()
+end = d.index(b"end_header\n") + len(b"end_header\n")
+head = d[:end].decode("ascii").split("\n")
+assert head[:2] == ["ply", "format binary_little_endian 1.0"], head[:2]
+nv = int([h for h in head if h.startswith("element vertex ")][0].split()[2])
+nf = int([h for h in head if h.startswith("element face ")][0].split()[2])
+assert nf == int(sys.argv[2]), (nf, sys.argv[2])
+assert "property list uchar int vertex_indices" in head
+assert len(d) == end + 12 * nv + 13 * nf, "file size"
+xyz = struct.unpack_from("<%df" % (3 * nv), d, end)
+assert all(0.5 < (xyz[k] ** 2 + xyz[k + 1] ** 2 + xyz[k + 2] ** 2) ** 0.5 < 1.5
+           for k in range(0, len(xyz), 3)), "a vertex off the bumpy sphere"
+for i in range(nf):
+    c, a, b, e = struct.unpack_from("<B3i", d, end + 12 * nv + 13 * i)
+    assert c == 3 and 0 <= min(a, b, e) and max(a, b, e) < nv and len({a, b, e}) == 3, i
+PY
+check "the PLY's header, sizes and indices" 0 $?
+tools/gen-mesh --count 1001 --format nff --res 16 "$T/mesh.nff" >"$T/log" 2>&1
+check "gen-mesh nff" 0 $?
+check_true "1001 NFF triangles" test "$(grep -c '^p 3$' "$T/mesh.nff")" -eq 1001
+"$BUILD/clwhitted" -q -W 16 -H 16 "$T/mesh.nff" -o "$T/mesh.png" >"$T/log" 2>&1
+check "clwhitted reads the NFF mesh" 0 $?
+tools/gen-mesh --count 0 "$T/zero.ply" >"$T/log" 2>&1
+check "gen-mesh --count 0" 2 $?
+check_true "its message says what a count is" has "is not a count from 1 to 200M"
 
 # The smoke run: every table, with the anchor and POV-Ray where they are there.
 opts=""
