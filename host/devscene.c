@@ -4,6 +4,7 @@
 #include "devscene.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,6 +12,9 @@
 #include "box.h"
 #include "polygon.h"
 #include "scene_geom.h"
+
+#define PACK_PARTS 2               /* the packing of triangle leaves: parts, one thread each */
+#define PACK_PAR_BLOCKS (1L << 16) /* fewer blocks: all parts on one thread */
 
 /* One line per kernel buffer of kernels/world.h: where its host array is, and its length. */
 #define DEVSCENE_ARRAYS(X)                                                                         \
@@ -386,31 +390,25 @@ static void set_lane(cw_float4 *v, int lane, float x)
     *f = x;
 }
 
-/* Packs every leaf of two or more triangles only into blocks of four (cw_tri4, in leaf
- * order, so the kernels test them in the order of the references) and points the leaf at
- * its blocks. A leaf of one triangle stays a reference: a block of one would test no
- * faster and cost 160 bytes for the triangle's 64. */
-static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
+/* The blocks the leaves of wide nodes [n0, n1) need (see pack_nodes). */
+static size_t count_blocks(const devscene *ds, int n0, int n1)
 {
-    bvhw *t = &ds->tree_wide;
-    size_t nblocks = 0, b;
-    for (int n = 0; n < t->num_nodes; n++)
+    size_t nblocks = 0;
+    for (int n = n0; n < n1; n++)
         for (int i = 0; i < CW_BVH_WIDTH; i++) {
-            int c = t->nodes[n].count[i];
-            if (c >= 2 && all_triangles(ds->refs, t->nodes[n].child[i], c))
+            int c = ds->tree_wide.nodes[n].count[i];
+            if (c >= 2 && all_triangles(ds->refs, ds->tree_wide.nodes[n].child[i], c))
                 nblocks += ((size_t)c + 3) / 4;
         }
-    if (nblocks == 0)
-        return 0;
-    ds->tri_blocks = calloc(nblocks, sizeof *ds->tri_blocks);
-    if (!ds->tri_blocks) {
-        snprintf(err, errlen, "out of memory for %zu triangle blocks", nblocks);
-        return -1;
-    }
-    b = 0;
-    for (int n = 0; n < t->num_nodes; n++)
+    return nblocks;
+}
+
+/* Packs the leaves of wide nodes [n0, n1) into blocks from ds->tri_blocks[b] on. */
+static void pack_nodes(devscene *ds, int n0, int n1, size_t b)
+{
+    for (int n = n0; n < n1; n++)
         for (int i = 0; i < CW_BVH_WIDTH; i++) {
-            cw_bvhw_node *nd = &t->nodes[n];
+            cw_bvhw_node *nd = &ds->tree_wide.nodes[n];
             int c = nd->count[i], first = nd->child[i];
             if (c < 2 || !all_triangles(ds->refs, first, c))
                 continue;
@@ -431,6 +429,57 @@ static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
                 ds->tri_blocks[b + (size_t)k / 4].index[k % 4] = -1;
             b += ((size_t)c + 3) / 4;
         }
+}
+
+/* One part of the packing: wide nodes [n0, n1), their blocks from b on. */
+typedef struct {
+    devscene *ds;
+    int n0, n1;
+    size_t b;
+} pack_part;
+
+static void *pack_part_run(void *arg)
+{
+    pack_part *pp = arg;
+    pack_nodes(pp->ds, pp->n0, pp->n1, pp->b);
+    return NULL;
+}
+
+/* Packs every leaf of two or more triangles only into blocks of four (cw_tri4, in leaf
+ * order, so the kernels test them in the order of the references) and points the leaf at
+ * its blocks. A leaf of one triangle stays a reference: a block of one would test no
+ * faster and cost 160 bytes for the triangle's 64. The nodes are cut into PACK_PARTS
+ * ranges, each counted, then packed on its own thread where the scene is big (the same
+ * blocks as one pass in order). */
+static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
+{
+    pack_part part[PACK_PARTS];
+    pthread_t tid[PACK_PARTS];
+    int started[PACK_PARTS] = {0}, nn = ds->tree_wide.num_nodes, threaded;
+    size_t nblocks = 0;
+    for (int k = 0; k < PACK_PARTS; k++) {
+        part[k].ds = ds;
+        part[k].n0 = (int)((long long)nn * k / PACK_PARTS);
+        part[k].n1 = (int)((long long)nn * (k + 1) / PACK_PARTS);
+        part[k].b = nblocks;
+        nblocks += count_blocks(ds, part[k].n0, part[k].n1);
+    }
+    if (nblocks == 0)
+        return 0;
+    ds->tri_blocks = calloc(nblocks, sizeof *ds->tri_blocks);
+    if (!ds->tri_blocks) {
+        snprintf(err, errlen, "out of memory for %zu triangle blocks", nblocks);
+        return -1;
+    }
+    threaded = nblocks >= PACK_PAR_BLOCKS;
+    for (int k = 1; threaded && k < PACK_PARTS; k++)
+        started[k] = pthread_create(&tid[k], NULL, pack_part_run, &part[k]) == 0;
+    for (int k = 0; k < PACK_PARTS; k++) /* this thread: its part and any not started */
+        if (!started[k])
+            pack_part_run(&part[k]);
+    for (int k = 1; k < PACK_PARTS; k++)
+        if (started[k])
+            pthread_join(tid[k], NULL);
     ds->nblocks = (int)nblocks;
     return 0;
 }
