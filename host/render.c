@@ -208,11 +208,11 @@ int renderer_ensure_program(renderer *r, int strategy, char *err, size_t errlen)
  * as soon as the device holds its copy (sys_release): the host copy and the device copy of
  * a scene array are never both whole, so the peak memory of the upload is the scene's plus
  * one piece rather than plus its largest array. */
-static int upload_pieces(renderer *r, cl_mem m, void *data, size_t bytes, const char *what,
-                         char *err, size_t errlen)
+static int upload_pieces(renderer *r, cl_mem m, void *data, size_t bytes, size_t piece,
+                         const char *what, char *err, size_t errlen)
 {
-    for (size_t off = 0; off < bytes; off += CW_UPLOAD_PIECE) {
-        size_t len = bytes - off < CW_UPLOAD_PIECE ? bytes - off : CW_UPLOAD_PIECE;
+    for (size_t off = 0; off < bytes; off += piece) {
+        size_t len = bytes - off < piece ? bytes - off : piece;
         cl_int e =
             clEnqueueWriteBuffer(r->queue, m, CL_TRUE, off, len, (char *)data + off, 0, NULL, NULL);
         if (e != CL_SUCCESS) {
@@ -227,10 +227,12 @@ static int upload_pieces(renderer *r, cl_mem m, void *data, size_t bytes, const 
 
 /* A read-only buffer holding a copy of count elements (at least one element is
  * allocated: OpenCL has no empty buffers). A host array the caller frees right after
- * (release) and larger than a piece is written in pieces (upload_pieces). */
+ * (release) and larger than a piece (CW_UPLOAD_PIECE, or the test hook's) is written in
+ * pieces (upload_pieces). */
 static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t size, int release,
                   const char *what, char *err, size_t errlen)
 {
+    size_t piece;
     cl_int e;
     void *zero = NULL;
     if (count == 0) {
@@ -251,7 +253,8 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
         free(zero);
         return -1;
     }
-    release = release && count * size > CW_UPLOAD_PIECE;
+    piece = r->upload_piece ? r->upload_piece : CW_UPLOAD_PIECE;
+    release = release && count * size > piece;
     *m = clCreateBuffer(r->ctx, CL_MEM_READ_ONLY | (release ? 0 : CL_MEM_COPY_HOST_PTR),
                         count * size, release ? NULL : (void *)data, &e);
     free(zero);
@@ -260,7 +263,7 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
         snprintf(call, sizeof call, "clCreateBuffer(%s, %zu bytes)", what, count * size);
         return rpass_fail(e, call, r, err, errlen);
     }
-    return release ? upload_pieces(r, *m, (void *)data, count * size, what, err, errlen) : 0;
+    return release ? upload_pieces(r, *m, (void *)data, count * size, piece, what, err, errlen) : 0;
 }
 
 /* Uploads every buffer of CW_WORLD_BUFFERS in list order from the devscene's arrays (the

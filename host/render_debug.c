@@ -112,3 +112,8 @@ void renderer_debug_world_origin(renderer *r, int on)
 {
     r->world_origin = on != 0;
 }
+
+void renderer_debug_upload_piece(renderer *r, size_t bytes)
+{
+    r->upload_piece = bytes;
+}

@@ -27,6 +27,10 @@ int renderer_occluded(renderer *r, const cw_shadow_ray *rays, int n, int *blocke
  * world coordinates through the hooks above. on = 0: the camera's eye (the default). */
 void renderer_debug_world_origin(renderer *r, int on);
 
+/* The scenes uploaded from now on: every array of more than `bytes` bytes is written in
+ * pieces of that many, each given back once uploaded (0: CW_UPLOAD_PIECE, the default). */
+void renderer_debug_upload_piece(renderer *r, size_t bytes);
+
 /* The build options of the kernel program built last ("" before any build). */
 const char *renderer_build_options(const renderer *r);
 

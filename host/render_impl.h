@@ -43,6 +43,8 @@ struct renderer {
      * hook) keeps it at 0, the plain float conversion of world coordinates */
     vec3d origin;
     int world_origin;
+    /* the pieces big scene arrays are uploaded in (0: CW_UPLOAD_PIECE; a test hook) */
+    size_t upload_piece;
     clprog_features features;
     /* work buffers, grown on demand: two ray queues (this level's, the next), hits,
      * shadow rays, the accumulation image (rgb + sample count per pixel), counters */

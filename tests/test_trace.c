@@ -23,10 +23,12 @@
 #include "testutil.h"
 
 #include "devscene.h"
+#include "image.h"
 #include "prim.h"
 #include "render.h"
 #include "render_debug.h"
 #include "scene.h"
+#include "scene_load.h"
 
 #define PI 3.14159265358979323846
 
@@ -1696,6 +1698,54 @@ static void test_spd(void **state)
     settings(0, 0, RENDER_ROBUST);
 }
 
+/* ---- the upload in pieces ------------------------------------------------------------ */
+
+/* Scenes whose arrays are uploaded in pieces of 100 bytes, of a page and a bit, and of
+ * 64 KiB and a bit (each piece's memory given back once uploaded, pieces not aligned to
+ * pages) render the image of the whole-array upload, bit for bit. */
+static void test_upload_pieces(void **state)
+{
+    static const char *const scenes[] = {
+        "scenes/default.json",
+        "tests/scenes/portability/spd-balls2.nff",
+        "tests/scenes/portability/polygons.nff",
+        "tests/scenes/origin/far.nff",
+    };
+    static const size_t pieces[] = {100, 4096 + 12, 65536 + 20};
+    (void)state;
+    renderer_debug_world_origin(R, 0);
+    settings(0, 0, RENDER_ROBUST);
+    for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; si++) {
+        scene sc;
+        image whole = {0, 0, NULL};
+        scene_init(&sc);
+        renderer_debug_upload_piece(R, 0);
+        if (scene_load(scenes[si], &sc, err, sizeof err) != 0 ||
+            scene_finish(&sc, 48, 36, 0, err, sizeof err) != 0 ||
+            renderer_set_scene(R, &sc, err, sizeof err) != 0 ||
+            renderer_render(R, &whole, err, sizeof err) != 0)
+            fail_msg("%s: %s", scenes[si], err);
+        for (size_t k = 0; k < sizeof pieces / sizeof pieces[0]; k++) {
+            image got = {0, 0, NULL};
+            renderer_debug_upload_piece(R, pieces[k]);
+            if (renderer_set_scene(R, &sc, err, sizeof err) != 0 ||
+                renderer_render(R, &got, err, sizeof err) != 0)
+                fail_msg("%s, pieces of %zu bytes: %s", scenes[si], pieces[k], err);
+            if (got.width != whole.width || got.height != whole.height ||
+                memcmp(got.rgb, whole.rgb, (size_t)got.width * got.height * 3 * sizeof(float)))
+                fail_msg("%s: uploaded in pieces of %zu bytes, another image", scenes[si],
+                         pieces[k]);
+            image_free(&got);
+        }
+        printf("  %s: the same image uploaded whole and in pieces of %zu, %zu and %zu bytes\n",
+               scenes[si], pieces[0], pieces[1], pieces[2]);
+        image_free(&whole);
+        scene_free(&sc);
+    }
+    renderer_debug_upload_piece(R, 0);
+    renderer_debug_world_origin(R, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1709,6 +1759,7 @@ int main(void)
         cmocka_unit_test(test_specialised_builds),
         cmocka_unit_test(test_stats),
         cmocka_unit_test(test_spd),
+        cmocka_unit_test(test_upload_pieces),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
