@@ -23,6 +23,7 @@
 
 #define PAR_MIN_PRIMS (1 << 15) /* fewer primitives: one thread builds everything */
 #define PAR_SUBTREES 8          /* subtrees per thread the top of the tree is cut into */
+#define PAR_MIN_WIDE (1 << 16)  /* fewer binary nodes: the collapse runs on one thread */
 
 /* Builds the subtrees in order of bd->order until none is left (one such loop per thread). */
 static void *build_subtrees(void *arg)
@@ -284,41 +285,59 @@ static double slot_area(const cw_bvh_node *n2, int i)
     return n2[i].count <= 0 ? box_area(n2[i].lo, n2[i].hi) : -1.0;
 }
 
-/* Builds the wide node for binary node i2 at out->nodes[out->num_nodes++]; returns its
- * index and sets *need to the stack entries its subtree's traversal needs. The recursion
- * is as deep as the binary tree (at most BVH_MAX_DEPTH). */
-static int collapse(const cw_bvh_node *n2, int i2, bvhw *out, int *need)
+/* The binary nodes that become the lanes of the wide node made for binary node i2: its
+ * children, then, while there is room, the interior one of largest area is replaced by its
+ * two children (its first child in its place, its second at the end). Returns the count. */
+static int choose_slots(const cw_bvh_node *n2, int i2, int slots[CW_BVH_WIDTH])
 {
-    int slots[CW_BVH_WIDTH], ns = 0, k = out->num_nodes++, i, interior = 0, deepest = 0;
-    cw_bvhw_node *q;
-
+    double area[CW_BVH_WIDTH]; /* of each interior slot; -1 for a leaf */
+    int ns = 0;
     if (n2[i2].count > 0) {
-        slots[ns++] = i2;
-    } else {
-        double area[CW_BVH_WIDTH]; /* of each interior slot; -1 for a leaf */
-        slots[ns++] = i2 + 1;
-        slots[ns++] = n2[i2].start;
-        area[0] = slot_area(n2, slots[0]);
-        area[1] = slot_area(n2, slots[1]);
-        while (ns < CW_BVH_WIDTH) {
-            int best = -1;
-            double best_area = -1;
-            for (i = 0; i < ns; i++)
-                if (area[i] > best_area) {
-                    best = i;
-                    best_area = area[i];
-                }
-            if (best < 0)
-                break;
-            slots[ns] = n2[slots[best]].start;
-            area[ns] = slot_area(n2, slots[ns]);
-            ns++;
-            slots[best] = slots[best] + 1;
-            area[best] = slot_area(n2, slots[best]);
-        }
+        slots[0] = i2;
+        return 1;
     }
+    slots[ns++] = i2 + 1;
+    slots[ns++] = n2[i2].start;
+    area[0] = slot_area(n2, slots[0]);
+    area[1] = slot_area(n2, slots[1]);
+    while (ns < CW_BVH_WIDTH) {
+        int best = -1;
+        double best_area = -1;
+        for (int i = 0; i < ns; i++)
+            if (area[i] > best_area) {
+                best = i;
+                best_area = area[i];
+            }
+        if (best < 0)
+            break;
+        slots[ns] = n2[slots[best]].start;
+        area[ns] = slot_area(n2, slots[ns]);
+        ns++;
+        slots[best] = slots[best] + 1;
+        area[best] = slot_area(n2, slots[best]);
+    }
+    return ns;
+}
+
+/* The wide nodes collapse makes for binary node i2 (the same choices, nothing written). */
+static int collapse_count(const cw_bvh_node *n2, int i2)
+{
+    int slots[CW_BVH_WIDTH], ns = choose_slots(n2, i2, slots), c = 1;
+    for (int i = 0; i < ns; i++)
+        if (n2[slots[i]].count <= 0)
+            c += collapse_count(n2, slots[i]);
+    return c;
+}
+
+/* Builds the wide node for binary node i2 at nodes[(*next)++], its subtree after it
+ * depth-first; returns its index and sets *need to the stack entries its subtree's
+ * traversal needs. The recursion is as deep as the binary tree (at most BVH_MAX_DEPTH). */
+static int collapse(const cw_bvh_node *n2, int i2, cw_bvhw_node *nodes, int *next, int *need)
+{
+    int slots[CW_BVH_WIDTH], ns = choose_slots(n2, i2, slots), k = (*next)++, i;
+    int interior = 0, deepest = 0;
     for (i = 0; i < CW_BVH_WIDTH; i++) {
-        q = &out->nodes[k];
+        cw_bvhw_node *q = &nodes[k];
         if (i >= ns) {
             set_lane(q, i, NULL);
             q->child[i] = 0;
@@ -328,11 +347,10 @@ static int collapse(const cw_bvh_node *n2, int i2, bvhw *out, int *need)
             q->child[i] = n2[slots[i]].start;
             q->count[i] = n2[slots[i]].count;
         } else {
-            int sub = 0, c;
+            int sub = 0;
             set_lane(q, i, &n2[slots[i]]);
             q->count[i] = 0;
-            c = collapse(n2, slots[i], out, &sub);
-            out->nodes[k].child[i] = c;
+            q->child[i] = collapse(n2, slots[i], nodes, next, &sub);
             interior++;
             if (sub > deepest)
                 deepest = sub;
@@ -343,9 +361,101 @@ static int collapse(const cw_bvh_node *n2, int i2, bvhw *out, int *need)
     return k;
 }
 
+/* The collapse of a big tree on several threads: the root's wide node is made first, and
+ * its interior lanes' subtrees are counted (collapse_count), then written at the indices
+ * the one-thread collapse gives them (the counts of the lanes before), lanes handed out
+ * in order to whichever thread is free, in both phases. */
+typedef struct {
+    const cw_bvh_node *n2;
+    cw_bvhw_node *nodes;
+    int slots[CW_BVH_WIDTH], ns;
+    int count[CW_BVH_WIDTH], first[CW_BVH_WIDTH], need[CW_BVH_WIDTH];
+    int writing, next_lane;
+    pthread_mutex_t lock;
+} wide_par;
+
+static void *wide_par_run(void *arg)
+{
+    wide_par *wp = arg;
+    for (;;) {
+        int i, next;
+        pthread_mutex_lock(&wp->lock);
+        i = wp->next_lane < wp->ns ? wp->next_lane++ : -1;
+        pthread_mutex_unlock(&wp->lock);
+        if (i < 0)
+            return NULL;
+        if (wp->n2[wp->slots[i]].count > 0)
+            continue;
+        if (!wp->writing) {
+            wp->count[i] = collapse_count(wp->n2, wp->slots[i]);
+        } else {
+            next = wp->first[i];
+            collapse(wp->n2, wp->slots[i], wp->nodes, &next, &wp->need[i]);
+        }
+    }
+}
+
+/* Runs one phase of wp on `threads` threads (this one included). */
+static void wide_par_phase(wide_par *wp, int threads)
+{
+    pthread_t tid[CW_BVH_MAX_THREADS];
+    int started[CW_BVH_MAX_THREADS];
+    wp->next_lane = 0;
+    for (int k = 1; k < threads; k++)
+        started[k] = pthread_create(&tid[k], NULL, wide_par_run, wp) == 0;
+    wide_par_run(wp);
+    for (int k = 1; k < threads; k++)
+        if (started[k])
+            pthread_join(tid[k], NULL);
+}
+
+/* bvh_collapse_wide's work for a tree of at least two binary nodes on `threads` threads;
+ * returns the wide node count and sets *need. */
+static int collapse_parallel(const cw_bvh_node *n2, cw_bvhw_node *nodes, int threads, int *need)
+{
+    wide_par wp;
+    int next = 1, interior = 0, deepest = 0;
+    memset(&wp, 0, sizeof wp);
+    if (pthread_mutex_init(&wp.lock, NULL) != 0) {
+        collapse(n2, 0, nodes, &next, need);
+        return next;
+    }
+    wp.n2 = n2;
+    wp.nodes = nodes;
+    wp.ns = choose_slots(n2, 0, wp.slots);
+    wide_par_phase(&wp, threads);
+    for (int i = 0; i < wp.ns; i++)
+        if (n2[wp.slots[i]].count <= 0) {
+            wp.first[i] = next;
+            next += wp.count[i];
+        }
+    wp.writing = 1;
+    wide_par_phase(&wp, threads);
+    pthread_mutex_destroy(&wp.lock);
+    for (int i = 0; i < CW_BVH_WIDTH; i++) { /* the root, as collapse makes it */
+        const cw_bvh_node *c = i < wp.ns ? &n2[wp.slots[i]] : NULL;
+        set_lane(&nodes[0], i, c);
+        nodes[0].child[i] = !c ? 0 : c->count > 0 ? c->start : wp.first[i];
+        nodes[0].count[i] = !c ? -1 : c->count > 0 ? c->count : 0;
+        if (c && c->count <= 0) {
+            interior++;
+            if (wp.need[i] > deepest)
+                deepest = wp.need[i];
+        }
+    }
+    *need = (interior > 1 ? interior - 1 : 0) + deepest;
+    return next;
+}
+
 int bvh_collapse_wide(const bvh *b, bvhw *out, char *err, size_t errlen)
 {
+    return bvh_collapse_wide_threads(b, out, CW_BVH_THREADS, err, errlen);
+}
+
+int bvh_collapse_wide_threads(const bvh *b, bvhw *out, int threads, char *err, size_t errlen)
+{
     int need = 0;
+    threads = thread_count(threads);
     memset(out, 0, sizeof *out);
     if (b->num_nodes == 0)
         return 0;
@@ -354,7 +464,11 @@ int bvh_collapse_wide(const bvh *b, bvhw *out, char *err, size_t errlen)
         snprintf(err, errlen, "out of memory for the wide BVH (%d nodes)", b->num_nodes);
         return -1;
     }
-    collapse(b->nodes, 0, out, &need);
+    if (threads > 1 && b->num_nodes >= PAR_MIN_WIDE && b->nodes[0].count <= 0) {
+        out->num_nodes = collapse_parallel(b->nodes, out->nodes, threads, &need);
+    } else {
+        collapse(b->nodes, 0, out->nodes, &out->num_nodes, &need);
+    }
     out->stack_need = need + 1;
     { /* a fraction of the binary count is used: give the rest back */
         cw_bvhw_node *shrunk = realloc(out->nodes, (size_t)out->num_nodes * sizeof *out->nodes);

@@ -71,6 +71,9 @@ typedef struct {
 /* Collapses a built tree (b->num_nodes may be 0: an empty result). Returns 0, or -1 with
  * a message in err (out of memory). */
 int bvh_collapse_wide(const bvh *b, bvhw *out, char *err, size_t errlen);
+/* bvh_collapse_wide on `threads` threads (<= 0: one per online core; bvh_collapse_wide takes
+ * CW_BVH_THREADS). The wide tree is the same, bit for bit, for every thread count. */
+int bvh_collapse_wide_threads(const bvh *b, bvhw *out, int threads, char *err, size_t errlen);
 void bvhw_free(bvhw *b);
 
 #endif

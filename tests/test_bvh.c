@@ -1125,7 +1125,7 @@ static int walk_wide(const bvhw *q, const bvh *t, const bvh_box *boxes, int k, i
 
 static void test_collapse_wide(void **state)
 {
-    static const int sizes[] = {0, 1, 2, 5, 17, 1000, 100000};
+    static const int sizes[] = {0, 1, 2, 5, 17, 1000, 100000, 300000};
     char err[256];
     size_t s;
     (void)state;
@@ -1148,6 +1148,19 @@ static void test_collapse_wide(void **state)
                 assert_int_equal(seen[i], 1);
             assert_int_equal(need, q.stack_need);
             assert_true(q.stack_need <= CW_BVH_STACK);
+        }
+        /* the same wide tree, bit for bit, on one thread and on several (100000
+         * primitives: the root's lanes collapsed in parallel) */
+        for (int threads = 1; threads <= 3; threads += 2) {
+            bvhw other;
+            assert_int_equal(bvh_collapse_wide_threads(&t, &other, threads, err, sizeof err), 0);
+            if (other.num_nodes != q.num_nodes || other.stack_need != q.stack_need ||
+                (q.num_nodes > 0 &&
+                 memcmp(other.nodes, q.nodes, (size_t)q.num_nodes * sizeof *q.nodes) != 0))
+                fail_msg("%d primitives: the collapse on %d thread(s) gives another wide tree "
+                         "(%d nodes, stack %d; default: %d nodes, stack %d)",
+                         n, threads, other.num_nodes, other.stack_need, q.num_nodes, q.stack_need);
+            bvhw_free(&other);
         }
         printf("  %d-wide: %d primitives, %d binary nodes -> %d wide nodes, stack %d\n",
                CW_BVH_WIDTH, n, t.num_nodes, q.num_nodes, q.stack_need);
