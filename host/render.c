@@ -254,7 +254,7 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
         return -1;
     }
     piece = r->upload_piece ? r->upload_piece : CW_UPLOAD_PIECE;
-    release = release && count * size > piece;
+    release = release && !zero && count * size > piece;
     *m = clCreateBuffer(r->ctx, CL_MEM_READ_ONLY | (release ? 0 : CL_MEM_COPY_HOST_PTR),
                         count * size, release ? NULL : (void *)data, &e);
     free(zero);
