@@ -133,6 +133,7 @@ test: deps-dev $(BUILD)/clwhitted $(TEST_BIN)
 	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \
 	sh tests/quality.sh $(BUILD)/clwhitted $(BUILD)/imgtool || fail=1; \
 	sh tests/docs.sh $(BUILD)/clwhitted || fail=1; \
+	sh tests/meshes.sh $(BUILD) || fail=1; \
 	sh tests/bench.sh $(BUILD) || fail=1; \
 	sh tests/mpi.sh $(BUILD) || fail=1; \
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
