@@ -284,7 +284,8 @@ FUZZ_SRC_json  := $(FUZZ_SRC) host/scene_json.c host/scene_json_objects.c host/s
 FUZZ_LIBS_json  = $(shell pkg-config --libs libcjson 2>/dev/null)
 # The mesh reader over assimp (not instrumented: its own memory errors show only as crashes
 # or through the interceptors, e.g. of memcpy).
-FUZZ_SRC_mesh  := $(FUZZ_SRC) host/mesh_import.c host/mesh_material.c host/mesh_scene.c
+FUZZ_SRC_mesh  := $(FUZZ_SRC) host/mesh_import.c host/mesh_file.c host/mesh_material.c \
+                  host/mesh_scene.c
 FUZZ_LIBS_mesh  = $(shell pkg-config --libs assimp 2>/dev/null)
 FUZZ_HEADERS   := tests/fuzz/fuzz_check.h tests/fuzz/fuzz_mesh.h host/config.h host/sys.h host/xform.h $(wildcard host/scene*.h) \
                   $(wildcard host/mesh*.h)
