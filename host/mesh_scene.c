@@ -10,8 +10,8 @@
 #include "scene_mesh.h"
 
 /* The defaults (docs/scene-formats.md, "Mesh files"): a 640x480 image; the view from the
- * front (+z), raised 25 degrees and turned 35 degrees to the right, at a distance where the
- * bounding sphere fills the vertical field of view of 40 degrees. */
+ * front (+z), raised 25 degrees and turned 35 degrees to the right, at a distance where a
+ * sphere around the mesh fills the vertical field of view of 40 degrees. */
 #define MESH_WIDTH 640
 #define MESH_HEIGHT 480
 #define MESH_FOV 40.0
@@ -19,15 +19,25 @@
 #define MESH_AZIMUTH 35.0
 #define MESH_PI 3.14159265358979323846
 
-/* The centre and radius of the bounding sphere of the box lo..hi */
-static double bounds_sphere(const double lo[3], const double hi[3], double c[3])
+/* A sphere around the mesh (placed with the identity): centred on the box lo..hi, its
+ * radius the farthest vertex from there (at most the box's half diagonal). */
+static double bounds_sphere(const scene *s, int mesh, const double lo[3], const double hi[3],
+                            double c[3])
 {
-    double r = 0.0;
-    for (int a = 0; a < 3; a++) {
+    const scene_mesh *m = &SCENE_AT(s->meshes, scene_mesh, mesh);
+    double r2 = 0.0, r;
+    for (int a = 0; a < 3; a++)
         c[a] = 0.5 * (lo[a] + hi[a]);
-        r += (hi[a] - lo[a]) * (hi[a] - lo[a]);
+    for (size_t i = m->first; i < m->first + m->count; i++) {
+        const scene_triangle *t = &SCENE_AT(s->mesh_tris, scene_triangle, i);
+        for (int k = 0; k < 3; k++) {
+            double dx = t->p[k].x - c[0], dy = t->p[k].y - c[1], dz = t->p[k].z - c[2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 > r2)
+                r2 = d2;
+        }
     }
-    r = 0.5 * sqrt(r);
+    r = sqrt(r2);
     return r > 0.0 && isfinite(r) ? r : 1.0;
 }
 
@@ -139,7 +149,7 @@ static int build(scene *s, const char *name, int mesh, const mesh_view *view, ch
         snprintf(err, errlen, "%s: the mesh has no bounds", name);
         return -1;
     }
-    r = bounds_sphere(lo, hi, c);
+    r = bounds_sphere(s, mesh, lo, hi, c);
     s->width = MESH_WIDTH;
     s->height = MESH_HEIGHT;
     s->background = vec3f_make(0.08f, 0.09f, 0.11f);
