@@ -3,7 +3,9 @@
  * the file's node transforms applied in double precision, vertex normals kept where the
  * file has them (smooth shading), degenerate triangles dropped and counted, the file's
  * materials mapped (mesh_material.h) and appended to the scene's; optionally the file's
- * own camera and lights, placed by their nodes. */
+ * own camera and lights, placed by their nodes. One import at a time: assimp's logger,
+ * which catches its warnings here, and the crash guard around it (sys_guard_begin) are
+ * process-wide. */
 #ifndef CW_MESH_IMPORT_H
 #define CW_MESH_IMPORT_H
 
