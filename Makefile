@@ -282,13 +282,13 @@ FUZZ_SRC_nff   := $(FUZZ_SRC) host/scene_nff.c host/scene_nff_lex.c
 FUZZ_SRC_json  := $(FUZZ_SRC) host/scene_json.c host/scene_json_objects.c host/scene_json_value.c \
                   host/scene_json_xform.c
 FUZZ_LIBS_json  = $(shell pkg-config --libs libcjson 2>/dev/null)
-# The mesh reader over assimp (not instrumented: its own memory errors show only as crashes
-# or through the interceptors, e.g. of memcpy).
+# The mesh reader over assimp, loaded at run time (not instrumented: its own memory errors
+# show only as crashes or through the interceptors, e.g. of memcpy).
 FUZZ_SRC_mesh  := $(FUZZ_SRC) host/mesh_import.c host/mesh_file.c host/mesh_material.c \
-                  host/mesh_scene.c
-FUZZ_LIBS_mesh  = $(shell pkg-config --libs assimp 2>/dev/null)
+                  host/mesh_scene.c host/assimp_dl.c
+FUZZ_LIBS_mesh  = -ldl
 FUZZ_HEADERS   := tests/fuzz/fuzz_check.h tests/fuzz/fuzz_mesh.h host/config.h host/sys.h host/xform.h $(wildcard host/scene*.h) \
-                  $(wildcard host/mesh*.h)
+                  $(wildcard host/mesh*.h) host/assimp_dl.h
 # Inputs up to 64 KiB (larger seeds, such as the SPD scenes, are cut there); 10 s per input
 # is a hang; one allocation over 256 MiB or 2 GiB in all is a failure.
 FUZZ_OPTS    := -max_len=65536 -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=256 \
