@@ -29,7 +29,10 @@ CPPFLAGS += -D_POSIX_C_SOURCE=200809L -DCL_TARGET_OPENCL_VERSION=120 \
 # `make render` can install the packages before anything asks for them.
 PKG_CFLAGS = $(shell pkg-config --cflags libpng libcjson OpenEXR assimp 2>/dev/null)
 EXR_CORE   = $(or $(filter -lOpenEXRCore%,$(shell pkg-config --libs OpenEXR 2>/dev/null)),-lOpenEXRCore)
-LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson 2>/dev/null) $(EXR_CORE) -lz -lm -ldl -pthread
+LDLIBS     = -lOpenCL $(shell pkg-config --libs libpng libcjson 2>/dev/null) $(EXR_CORE) -lz -lm -ldl -pthread \
+             $(EXTRA_LIBS)
+# (make asan links libstdc++ through EXTRA_LIBS: see ASAN_LIBS below)
+EXTRA_LIBS ?=
 # --preview: GLFW and Xlib headers only; the libraries are loaded at run time (dlopen).
 GUI_CFLAGS = $(shell pkg-config --cflags glfw3 x11 2>/dev/null)
 CFLAGS  += $(WARN) $(OPT) -pthread $(PKG_CFLAGS) $(GUI_CFLAGS)
@@ -133,6 +136,7 @@ test: deps-dev $(BUILD)/clwhitted $(TEST_BIN)
 	sh tests/gallery.sh $(BUILD)/clwhitted || fail=1; \
 	sh tests/quality.sh $(BUILD)/clwhitted $(BUILD)/imgtool || fail=1; \
 	sh tests/docs.sh $(BUILD)/clwhitted || fail=1; \
+	sh tests/meshes.sh $(BUILD) || fail=1; \
 	sh tests/bench.sh $(BUILD) || fail=1; \
 	sh tests/mpi.sh $(BUILD) || fail=1; \
 	if [ $$fail -ne 0 ]; then echo "make test: FAILED"; exit 1; fi; echo "make test: all passed"
@@ -271,7 +275,7 @@ endif
 FUZZ_CC      ?= clang
 FUZZ_BUILD   := build-fuzz
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS := nff json
+FUZZ_TARGETS := nff json mesh
 FUZZ_CFLAGS  := -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined \
                 -fno-sanitize-recover=all
 # Each target links the scene model and its one reader, nothing else (no cJSON for NFF).
@@ -281,7 +285,13 @@ FUZZ_SRC_nff   := $(FUZZ_SRC) host/scene_nff.c host/scene_nff_lex.c
 FUZZ_SRC_json  := $(FUZZ_SRC) host/scene_json.c host/scene_json_objects.c host/scene_json_value.c \
                   host/scene_json_xform.c
 FUZZ_LIBS_json  = $(shell pkg-config --libs libcjson 2>/dev/null)
-FUZZ_HEADERS   := tests/fuzz/fuzz_check.h host/config.h host/sys.h host/xform.h $(wildcard host/scene*.h)
+# The mesh reader over assimp, loaded at run time (not instrumented: its own memory errors
+# show only as crashes or through the interceptors, e.g. of memcpy).
+FUZZ_SRC_mesh  := $(FUZZ_SRC) host/mesh_import.c host/mesh_file.c host/mesh_material.c \
+                  host/mesh_scene.c host/assimp_dl.c
+FUZZ_LIBS_mesh  = -ldl
+FUZZ_HEADERS   := tests/fuzz/fuzz_check.h tests/fuzz/fuzz_mesh.h host/config.h host/sys.h host/xform.h $(wildcard host/scene*.h) \
+                  $(wildcard host/mesh*.h) host/assimp_dl.h
 # Inputs up to 64 KiB (larger seeds, such as the SPD scenes, are cut there); 10 s per input
 # is a hang; one allocation over 256 MiB or 2 GiB in all is a failure.
 FUZZ_OPTS    := -max_len=65536 -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=256 \
@@ -291,6 +301,7 @@ FUZZ_OPTS    := -max_len=65536 -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2
 FUZZ_SEEDS_nff  = scenes/spd/*.nff tests/scenes/pov/*.nff tests/scenes/parse/*.nff \
                   $(wildcard ../shared/scenes/spd/*.nff)
 FUZZ_SEEDS_json = scenes/*.json tests/scenes/parse/*.json
+FUZZ_SEEDS_mesh =
 
 ASAN_CC      ?= clang
 ASAN_BUILD   := build-asan
@@ -301,7 +312,7 @@ ASAN_ENV     := ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_
                 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
 .PHONY: fuzz fuzz-build asan
-$(BUILD)/test_fuzzcorpus: tests/fuzz/fuzz_check.h
+$(BUILD)/test_fuzzcorpus: tests/fuzz/fuzz_check.h tests/fuzz/fuzz_mesh.h
 
 # The sources of target T are FUZZ_SRC_T, its libraries FUZZ_LIBS_T.
 .SECONDEXPANSION:
@@ -320,7 +331,8 @@ fuzz: fuzz-build
 	        cp "$$f" "$(FUZZ_BUILD)/seeds/$(t)/$$(echo "$$f" | sed "s|^\.\./||" | tr / _)"; done;)
 	@fail=0; for t in $(FUZZ_TARGETS); do \
 	    echo "== fuzz_$$t for $(FUZZ_SECONDS) s (log: $(FUZZ_BUILD)/fuzz_$$t.log)"; \
-	    if $(FUZZ_BUILD)/fuzz_$$t $(FUZZ_OPTS) -max_total_time=$(FUZZ_SECONDS) \
+	    if LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
+	        $(FUZZ_BUILD)/fuzz_$$t $(FUZZ_OPTS) -max_total_time=$(FUZZ_SECONDS) \
 	        -dict=tests/fuzz/$$t.dict -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t/ \
 	        $(FUZZ_BUILD)/corpus/$$t $(FUZZ_BUILD)/seeds/$$t tests/fuzz/corpus/$$t \
 	        tests/fuzz/regressions/$$t >$(FUZZ_BUILD)/fuzz_$$t.log 2>&1; then \
@@ -333,6 +345,11 @@ fuzz: fuzz-build
 	done; \
 	if [ $$fail -ne 0 ]; then echo "make fuzz: FAILED"; exit 1; fi; echo "make fuzz: no failures"
 
+# libstdc++ linked in (though nothing of ours needs it): AddressSanitizer intercepts C++'s
+# __cxa_throw when the program starts, and assimp, loaded later by dlopen, throws (a .glb
+# file's reader does even on good input); without the real function there, the first
+# throw stops the program with "CHECK failed: ... real___cxa_throw".
+ASAN_LIBS    := -Wl,--push-state,--no-as-needed -lstdc++ -Wl,--pop-state
 asan:
 	$(ASAN_ENV) $(MAKE) BUILD=$(ASAN_BUILD) CC=$(ASAN_CC) OPT='$(ASAN_FLAGS)' \
-	    LDFLAGS='-fsanitize=address,undefined' test
+	    LDFLAGS='-fsanitize=address,undefined' EXTRA_LIBS='$(ASAN_LIBS)' test

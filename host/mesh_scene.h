@@ -9,11 +9,17 @@
 #include "mesh_import.h"
 #include "scene.h"
 
-/* The warnings of an import (degenerate triangles left out, textures ignored) on stderr,
- * once per file. */
+/* The warnings of an import on stderr, once per file: a missing MTL, degenerate
+ * triangles, points and lines left out, textures and vertex colours ignored. */
 void mesh_scene_warn(const char *path, const mesh_import_info *info);
 
-/* Loads path as a scene. Returns 0, or -1 with "path: message" in err. */
+/* Loads path as a scene; warnings (degenerate triangles, textures, a missing MTL) on
+ * stderr. Returns 0, or -1 with "path: message" in err. */
 int mesh_scene_load(const char *path, scene *s, char *err, size_t errlen);
+
+/* The same from memory, without warnings; hint is the format's extension without the dot
+ * ("glb"), name is used in messages. For the fuzzer. */
+int mesh_scene_memory(const void *data, size_t size, const char *hint, const char *name, scene *s,
+                      char *err, size_t errlen);
 
 #endif

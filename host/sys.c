@@ -229,6 +229,62 @@ static void on_fatal_signal(int sig)
     (void)raise(sig);
 }
 
+/* ---- a guarded call into a library that may crash --------------------------------- */
+
+#define GUARD_SIGS                                                                                 \
+    {                                                                                              \
+        SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT                                                   \
+    }
+#define GUARD_NSIGS 5
+static char guard_msg[1536];
+static size_t guard_len;
+static struct sigaction guard_old[GUARD_NSIGS];
+static char guard_stack[1 << 16]; /* the handler's stack: the crash may be an overflow */
+static stack_t guard_old_stack;
+
+static void on_guarded_crash(int sig)
+{
+    int i;
+    ssize_t w;
+    (void)sig;
+    for (i = 0; i < SIG_SLOTS; i++)
+        if (sig_used[i])
+            (void)unlink(sig_tmp[i]);
+    w = write(2, guard_msg, guard_len);
+    (void)w;
+    _exit(1);
+}
+
+void sys_guard_begin(const char *msg)
+{
+    static const int sigs[] = GUARD_SIGS;
+    struct sigaction sa;
+    stack_t st;
+    size_t i;
+    guard_len = strlen(msg) < sizeof guard_msg - 1 ? strlen(msg) : sizeof guard_msg - 2;
+    memcpy(guard_msg, msg, guard_len);
+    guard_msg[guard_len++] = '\n';
+    st.ss_sp = guard_stack;
+    st.ss_size = sizeof guard_stack;
+    st.ss_flags = 0;
+    (void)sigaltstack(&st, &guard_old_stack);
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_guarded_crash;
+    sa.sa_flags = SA_ONSTACK;
+    sigemptyset(&sa.sa_mask);
+    for (i = 0; i < GUARD_NSIGS; i++)
+        (void)sigaction(sigs[i], &sa, &guard_old[i]);
+}
+
+void sys_guard_end(void)
+{
+    static const int sigs[] = GUARD_SIGS;
+    size_t i;
+    for (i = 0; i < GUARD_NSIGS; i++)
+        (void)sigaction(sigs[i], &guard_old[i], NULL);
+    (void)sigaltstack(&guard_old_stack, NULL);
+}
+
 void sys_signals_install(void)
 {
     static const int sigs[] = {SIGINT, SIGTERM, SIGHUP};

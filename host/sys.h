@@ -108,4 +108,12 @@ void sys_signals_install(void);
 /* The progress line the handler clears: len characters on fd (len 0: none). */
 void sys_signal_line(int fd, size_t len);
 
+/* A guard around a call into a library that may crash on bad input (assimp, on some
+ * malformed files): from begin to end, a fatal signal (SIGSEGV, SIGBUS, SIGFPE, SIGILL,
+ * SIGABRT) in any thread removes the temporary files, writes msg and a newline to stderr
+ * and ends the process with status 1. The handler runs on its own stack in the calling
+ * thread. One guarded window at a time; end restores the previous handlers. */
+void sys_guard_begin(const char *msg);
+void sys_guard_end(void);
+
 #endif

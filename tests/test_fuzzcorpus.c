@@ -1,10 +1,11 @@
-/* Replays the fuzzing corpora through the property the fuzz targets check (fuzz/fuzz_check.h):
- * every input that once broke a reader (tests/fuzz/regressions/TARGET/) and every seed
- * (tests/fuzz/corpus/TARGET/). Under `make asan` this runs with the sanitizers, as the
- * fuzzers do. Runs from the repository root. */
+/* Replays the fuzzing corpora through the property the fuzz targets check (fuzz/fuzz_check.h,
+ * fuzz/fuzz_mesh.h): every input that once broke a reader (tests/fuzz/regressions/TARGET/)
+ * and every seed (tests/fuzz/corpus/TARGET/). Under `make asan` this runs with the
+ * sanitizers, as the fuzzers do. Runs from the repository root. */
 #include "testutil.h"
 
 #include "fuzz/fuzz_check.h"
+#include "fuzz/fuzz_mesh.h"
 
 #include "config.h"
 #include "scene_json.h"
@@ -17,8 +18,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
-/* Runs every regular file of dir through the reader; returns how many, failing on the first
- * input that breaks the property. */
+/* Runs every regular file of dir through the reader (parse, or the mesh reader when parse
+ * is NULL); returns how many, failing on the first input that breaks the property. */
 static int replay_dir(const char *dir, fuzz_parser parse, const char *name)
 {
     DIR *d = opendir(dir);
@@ -41,7 +42,8 @@ static int replay_dir(const char *dir, fuzz_parser parse, const char *name)
             failed++;
             continue;
         }
-        if (fuzz_check(parse, name, (const unsigned char *)data, len, why, sizeof why) != 0) {
+        if ((parse ? fuzz_check(parse, name, (const unsigned char *)data, len, why, sizeof why)
+                   : fuzz_check_mesh((const unsigned char *)data, len, why, sizeof why)) != 0) {
             print_error("%s: %s\n", path, why);
             failed++;
         }
@@ -77,6 +79,12 @@ static void test_json_corpus(void **state)
 {
     (void)state;
     assert_true(replay_target("json", json_scene_parse, "fuzz.json") > 0);
+}
+
+static void test_mesh_corpus(void **state)
+{
+    (void)state;
+    assert_true(replay_target("mesh", NULL, "fuzz.mesh") > 0);
 }
 
 /* The property itself must be able to fail. */
@@ -128,6 +136,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_nff_corpus),
         cmocka_unit_test(test_json_corpus),
+        cmocka_unit_test(test_mesh_corpus),
         cmocka_unit_test(test_property_fails),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
