@@ -22,7 +22,7 @@ static void usage(FILE *f)
 {
     fputs(
 "usage: clwhitted [options] SCENE...\n"
-"Renders each SCENE (.nff or .json) with an OpenCL Whitted ray tracer.\n"
+"Renders each SCENE (.nff, .json, or a mesh file: .obj .ply .gltf .glb .stl)\nwith an OpenCL Whitted ray tracer.\n"
 "\n"
 "Output:\n"
 "  -o, --output FILE     output image: .exr (linear float) or .png (sRGB), for one\n"
