@@ -184,10 +184,11 @@ $(BUILD)/embree-anchor: $(wildcard $(ANCHOR_DIR)/embree_anchor.c) | $(BUILD)
 # Not part of make test (which runs tests/bench.sh, a smoke run). BENCH_ARGS passes options
 # (BENCH_ARGS=--no-anchor runs without the anchor); results go to build/bench/, and with
 # UPDATE_DOCS=1 also into the generated section of docs/benchmarks.md.
-bench: $(BUILD)/clwhitted $(BUILD)/scene2pov \
+bench: $(BUILD)/clwhitted $(BUILD)/scene2pov $(BUILD)/imgcmp \
        $(if $(filter --no-anchor,$(BENCH_ARGS)),,$(BUILD)/embree-anchor)
 	tools/bench --anchor $(BUILD)/embree-anchor $(BENCH_ARGS) \
 	    $(if $(filter 1,$(UPDATE_DOCS)),--update-docs docs/benchmarks.md)
+	tools/bench-instances $(BENCH_INSTANCES_ARGS)
 # tests/bench.sh runs POV-Ray through scene2pov, and the anchor where its source is here.
 test: $(BUILD)/scene2pov $(if $(wildcard $(ANCHOR_DIR)/embree_anchor.c),$(BUILD)/embree-anchor)
 
