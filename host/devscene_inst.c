@@ -130,15 +130,10 @@ static int convert_instance(const scene *s, size_t i, devscene *ds, char *err, s
     rows4(ci->to_world, &to_world);
     rows4(ci->to_mesh, &to_mesh);
     for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 4; c++) {
-            float v = c == 0   ? ci->to_mesh[r].x
-                      : c == 1 ? ci->to_mesh[r].y
-                      : c == 2 ? ci->to_mesh[r].z
-                               : ci->to_mesh[r].w;
-            if (!isfinite(v)) {
-                snprintf(err, errlen, "instance %zu: its transform overflows single precision", i);
-                return -1;
-            }
+        if (!isfinite(ci->to_mesh[r].x) || !isfinite(ci->to_mesh[r].y) ||
+            !isfinite(ci->to_mesh[r].z) || !isfinite(ci->to_mesh[r].w)) {
+            snprintf(err, errlen, "instance %zu: its transform overflows single precision", i);
+            return -1;
         }
     ci->root = in->mesh; /* until devinst_build puts the mesh's root node here */
     ci->material = in->material;

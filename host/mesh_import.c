@@ -57,6 +57,23 @@ static void log_line(const char *msg, char *user)
     scene_printable(line, sizeof line, l->bad, sizeof l->bad);
 }
 
+/* assimp's import of the file at path, or of size bytes at data (path NULL; hint: the
+ * format's extension), with its log caught in *log. */
+static const struct aiScene *read_logged(const char *path, const void *data, size_t size,
+                                         const char *hint, mesh_log *log)
+{
+    struct aiLogStream stream;
+    const struct aiScene *ai;
+    log->bad[0] = '\0';
+    stream.callback = log_line;
+    stream.user = (char *)(void *)log;
+    aiAttachLogStream(&stream);
+    ai = path ? aiImportFile(path, MESH_AI_READ)
+              : aiImportFileFromMemory(data, (unsigned)size, MESH_AI_READ, hint);
+    aiDetachLogStream(&stream);
+    return ai;
+}
+
 /* The file's lights beyond this many are left out. */
 #define MESH_MAX_LIGHTS 64
 
@@ -501,11 +518,7 @@ int mesh_import_view(const char *path, scene *s, int *mesh, mesh_import_info *in
         return -1;
     {
         mesh_log log;
-        struct aiLogStream stream;
         const struct aiScene *ai;
-        log.bad[0] = '\0';
-        stream.callback = log_line;
-        stream.user = (char *)(void *)&log;
         char msg[1200], shown[1024];
         int rc;
         /* assimp 5.2 crashes on some malformed OBJ and PLY files (make fuzz finds them):
@@ -515,9 +528,7 @@ int mesh_import_view(const char *path, scene *s, int *mesh, mesh_import_info *in
                  "it; the file is malformed",
                  sys_escape(shown, sizeof shown, path));
         sys_guard_begin(msg);
-        aiAttachLogStream(&stream);
-        ai = aiImportFile(path, MESH_AI_READ);
-        aiDetachLogStream(&stream);
+        ai = read_logged(path, NULL, 0, NULL, &log);
         rc = import_read(ai, &log, path, fmt, s, mesh, info, view, err, errlen);
         sys_guard_end();
         return rc;
@@ -550,14 +561,7 @@ int mesh_import_memory(const void *data, size_t size, const char *hint, const ch
         return -1;
     {
         mesh_log log;
-        struct aiLogStream stream;
-        const struct aiScene *ai;
-        log.bad[0] = '\0';
-        stream.callback = log_line;
-        stream.user = (char *)(void *)&log;
-        aiAttachLogStream(&stream);
-        ai = aiImportFileFromMemory(data, (unsigned)size, MESH_AI_READ, hint);
-        aiDetachLogStream(&stream);
+        const struct aiScene *ai = read_logged(NULL, data, size, hint, &log);
         return import_read(ai, &log, name, mesh_format_of(hint), s, mesh, info, view, err, errlen);
     }
 }

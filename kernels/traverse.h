@@ -78,6 +78,44 @@ CW_INLINE int bvh_next(int *stack, float *stack_t, int *sp, const int *ci, const
     }
 }
 
+#if CW_HAS_TRIANGLES
+/* The nb blocks of four triangles from `first` (a leaf of triangles only), never the
+ * triangle skip - 1, in order: on a hit closer than *t_best, records it in *hit and lowers
+ * *t_best. */
+CW_INLINE void bvh_closest_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri,
+                                  float tmin, int skip, float *t_best, cw_hit *hit)
+{
+    for (int k = first; k < first + nb; k++)
+        prim_tri4(w, k, ri, tmin, skip, t_best, hit);
+}
+
+/* Whether the ray meets one of the nb blocks from `first` in (tmin, tmax), never the
+ * triangle skip - 1. */
+CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri, float tmin,
+                             float tmax, int skip)
+{
+    for (int k = first; k < first + nb; k++) {
+        float t_lim = tmax;
+        cw_hit hit;
+        hit.kind = CW_PRIM_NONE;
+        prim_tri4(w, k, ri, tmin, skip, &t_lim, &hit);
+        if (hit.kind != CW_PRIM_NONE)
+            return 1;
+    }
+    return 0;
+}
+#endif
+
+/* Whether the ray meets primitive ref (not an instance) in (tmin, tmax). */
+CW_INLINE int bvh_any_prim(const cw_world *w, int ref, const cw_rayinfo *ri, float tmin, float tmax)
+{
+    float t_lim = tmax;
+    cw_hit hit;
+    hit.kind = CW_PRIM_NONE;
+    prim_intersect(w, ref, ri, tmin, &t_lim, &hit);
+    return hit.kind != CW_PRIM_NONE;
+}
+
 #if CW_HAS_INSTANCES
 /* Closest hit in a mesh's own tree from node root, for the ray ri in mesh coordinates:
  * its leaves hold triangles only (blocks of four, or single references). On a hit closer
@@ -106,8 +144,7 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
                         prim_intersect(w, ref, ri, tmin, t_best, hit);
                 }
             } else if (count < -1) {
-                for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++)
-                    prim_tri4(w, k, ri, tmin, skip, t_best, hit);
+                bvh_closest_blocks(w, nd->child[i], -1 - count, ri, tmin, skip, t_best, hit);
             } else if (count == 0) {
                 bvh_insert(ci, ct, n++, nd->child[i], enter[i]);
             }
@@ -125,8 +162,6 @@ CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, fl
 {
     int stack[CW_BVH_STACK];
     int sp = 0, i, k;
-    cw_hit hit;
-    float t_lim;
     stack[sp++] = root;
     while (sp > 0) {
         CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[stack[--sp]];
@@ -141,21 +176,11 @@ CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, fl
                 stack[sp++] = nd->child[i];
                 continue;
             }
-            for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++) {
-                t_lim = tmax;
-                hit.kind = CW_PRIM_NONE;
-                prim_tri4(w, k, ri, tmin, skip, &t_lim, &hit);
-                if (hit.kind != CW_PRIM_NONE)
-                    return 1;
-            }
+            if (count < -1 && bvh_any_blocks(w, nd->child[i], -1 - count, ri, tmin, tmax, skip))
+                return 1;
             for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                 int ref = w->refs[k];
-                if (ref + 1 == skip)
-                    continue;
-                t_lim = tmax;
-                hit.kind = CW_PRIM_NONE;
-                prim_intersect(w, ref, ri, tmin, &t_lim, &hit);
-                if (hit.kind != CW_PRIM_NONE)
+                if (ref + 1 != skip && bvh_any_prim(w, ref, ri, tmin, tmax))
                     return 1;
             }
         }
@@ -232,8 +257,7 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
                 }
 #if CW_HAS_TRIANGLES
             } else if (count < -1) { /* blocks of four triangles */
-                for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++)
-                    prim_tri4(w, k, &ri, tmin, wskip, &t_best, &hit);
+                bvh_closest_blocks(w, nd->child[i], -1 - count, &ri, tmin, wskip, &t_best, &hit);
 #endif
             } else if (count == 0) {
                 bvh_insert(ci, ct, n++, nd->child[i], e);
@@ -256,8 +280,6 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
     cw_rayinfo ri = isect_rayinfo(o, d);
     int stack[CW_BVH_STACK];
     int sp = 0, node, i, k;
-    cw_hit hit;
-    float t_lim;
     int wskip = skip_inst != 0 ? 0 : skip;
 
     if (w->num_nodes == 0)
@@ -280,13 +302,8 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
                 continue;
             }
 #if CW_HAS_TRIANGLES
-            for (k = nd->child[i]; k < nd->child[i] - 1 - count; k++) {
-                t_lim = tmax;
-                hit.kind = CW_PRIM_NONE;
-                prim_tri4(w, k, &ri, tmin, wskip, &t_lim, &hit);
-                if (hit.kind != CW_PRIM_NONE)
-                    return 1;
-            }
+            if (count < -1 && bvh_any_blocks(w, nd->child[i], -1 - count, &ri, tmin, tmax, wskip))
+                return 1;
 #endif
             for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                 int ref = w->refs[k];
@@ -300,12 +317,7 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
                     continue;
                 }
 #endif
-                if (ref + 1 == wskip)
-                    continue;
-                t_lim = tmax;
-                hit.kind = CW_PRIM_NONE;
-                prim_intersect(w, ref, &ri, tmin, &t_lim, &hit);
-                if (hit.kind != CW_PRIM_NONE)
+                if (ref + 1 != wskip && bvh_any_prim(w, ref, &ri, tmin, tmax))
                     return 1;
             }
         }
