@@ -172,13 +172,28 @@ static int thread_count(int threads)
     return threads < CW_BVH_MAX_THREADS ? threads : CW_BVH_MAX_THREADS;
 }
 
+static int build(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n, int max_leaf,
+                 int threads, char *err, size_t errlen);
+
 int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, size_t errlen)
 {
-    return bvh_build_threads(out, boxes, n, max_leaf, CW_BVH_THREADS, err, errlen);
+    return build(out, boxes, NULL, n, max_leaf, CW_BVH_THREADS, err, errlen);
 }
 
 int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int threads, char *err,
                       size_t errlen)
+{
+    return build(out, boxes, NULL, n, max_leaf, threads, err, errlen);
+}
+
+int bvh_build_blocks(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n,
+                     int max_leaf, int threads, char *err, size_t errlen)
+{
+    return build(out, boxes, blocks, n, max_leaf, threads, err, errlen);
+}
+
+static int build(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n, int max_leaf,
+                 int threads, char *err, size_t errlen)
 {
     cw_bvh_node *shrunk;
     sah_builder bd;
@@ -210,7 +225,7 @@ int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int t
             bd.w[i].hi[a] = boxes[i].hi[a];
         }
         bd.w[i].idx = i;
-        bd.w[i].pad = 0;
+        bd.w[i].block = blocks && blocks[i] ? 1 : 0;
     }
     bd.max_leaf = max_leaf;
     bd.threads = n >= PAR_MIN_PRIMS ? thread_count(threads) : 1;

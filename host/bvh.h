@@ -51,6 +51,12 @@ int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, si
  * from config.h). The tree is the same, bit for bit, for every thread count. */
 int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int threads, char *err,
                       size_t errlen);
+/* bvh_build_threads where blocks[i] != 0 marks box i as a primitive the kernels test
+ * SAH_BLOCK (4) at a time in a leaf of such primitives only (triangles: cw_tri4), so that
+ * the SAH prices such a leaf of n at ceil(n / 4) tests and prefers full blocks; blocks may
+ * be NULL (none marked: bvh_build_threads' tree). threads <= 0: one per online core. */
+int bvh_build_blocks(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n,
+                     int max_leaf, int threads, char *err, size_t errlen);
 void bvh_free(bvh *b);
 
 /* SAH cost of a built tree: the sum over nodes of area(node) / area(root) times C_trav = 1

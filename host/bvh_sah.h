@@ -8,14 +8,17 @@
 #include "bvh.h"
 
 #define C_TRAV 1.0  /* SAH cost of visiting an interior node */
-#define C_ISECT 1.0 /* SAH cost of testing one primitive */
+#define C_ISECT 1.0 /* SAH cost of testing one primitive, or one block of SAH_BLOCK */
+/* Primitives marked `block` are tested SAH_BLOCK at a time where a leaf holds only such
+ * primitives (the kernels' cw_tri4): such a leaf of n costs C_ISECT * ceil(n / SAH_BLOCK). */
+#define SAH_BLOCK 4
 
 /* One primitive in the working array: its box and input index (32 bytes). */
 typedef struct {
     float lo[3];
     int idx; /* index into the input boxes */
     float hi[3];
-    int pad;
+    int block; /* 1: tested SAH_BLOCK at a time in a leaf of such primitives only */
 } sah_prim;
 
 /* A node to make: its range of the working array and what is known of it. */

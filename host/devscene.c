@@ -488,8 +488,18 @@ static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
  * traverse, turns its leaf entries into CW_REFs and packs the leaves of triangles only. */
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
 {
-    int i;
-    if (bvh_build(&ds->tree, ds->boxes, ds->nbox, 4, err, errlen) != 0)
+    int i, rc;
+    /* triangles are tested four at a time in a leaf of triangles only (pack_triangle_leaves) */
+    unsigned char *blocks = malloc(ds->nbox > 0 ? (size_t)ds->nbox : 1);
+    if (!blocks) {
+        snprintf(err, errlen, "out of memory for the BVH");
+        return -1;
+    }
+    for (i = 0; i < ds->nbox; i++)
+        blocks[i] = CW_REF_KIND(ds->box_ref[i]) == CW_PRIM_TRIANGLE;
+    rc = bvh_build_blocks(&ds->tree, ds->boxes, blocks, ds->nbox, 4, CW_BVH_THREADS, err, errlen);
+    free(blocks);
+    if (rc != 0)
         return -1;
     free(ds->boxes); /* the builder has its own copy of what it needs */
     ds->boxes = NULL;

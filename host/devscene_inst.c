@@ -210,6 +210,18 @@ static int append_tree(devscene *ds, const bvh *b, const bvhw *t, int box_first,
 
 int devinst_build(devscene *ds, char *err, size_t errlen)
 {
+    unsigned char *blocks = NULL; /* all 1: a mesh's leaves hold triangles only */
+    int most = 0;
+    for (int m = 0; m < ds->nmesh; m++)
+        most = ds->meshes[m].count > most ? ds->meshes[m].count : most;
+    if (most > 0) {
+        blocks = malloc((size_t)most);
+        if (!blocks) {
+            snprintf(err, errlen, "out of memory for a mesh's BVH");
+            return -1;
+        }
+        memset(blocks, 1, (size_t)most);
+    }
     for (int m = 0; m < ds->nmesh; m++) {
         devscene_mesh *dm = &ds->meshes[m];
         bvh b;
@@ -218,8 +230,11 @@ int devinst_build(devscene *ds, char *err, size_t errlen)
         if (dm->count == 0)
             continue;
         memset(&t, 0, sizeof t);
-        if (bvh_build(&b, ds->mesh_boxes + dm->box_first, dm->count, 4, err, errlen) != 0)
+        if (bvh_build_blocks(&b, ds->mesh_boxes + dm->box_first, blocks, dm->count, 4,
+                             CW_BVH_THREADS, err, errlen) != 0) {
+            free(blocks);
             return -1;
+        }
         rc = bvh_collapse_wide(&b, &t, err, errlen);
         if (rc == 0 && t.stack_need > CW_BVH_STACK) {
             snprintf(
@@ -232,9 +247,12 @@ int devinst_build(devscene *ds, char *err, size_t errlen)
             dm->root = append_tree(ds, &b, &t, dm->box_first, err, errlen);
         bvh_free(&b);
         bvhw_free(&t);
-        if (rc != 0 || dm->root < 0)
+        if (rc != 0 || dm->root < 0) {
+            free(blocks);
             return -1;
+        }
     }
+    free(blocks);
     for (int i = 0; i < ds->ninst; i++)
         ds->inst[i].root = ds->meshes[ds->inst[i].root].root;
     free(ds->mesh_boxes);

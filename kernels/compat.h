@@ -1,6 +1,6 @@
 /* What differs between OpenCL C 1.2 and host C99, and nothing else: the address-space
  * and inline keywords (CW_GLOBAL, CW_INLINE, CW_FORCE_INLINE), the vector types
- * (cw_float4, vec3, cw_lanes), the math functions (cw_sqrt ...), the bit scan cw_ctz, the
+ * (cw_float4, cw_int4, vec3, cw_lanes), the math functions (cw_sqrt ...), the bit scan cw_ctz, the
  * atomics and the contraction pragma. The kernel headers are written with these so that they
  * compile both as OpenCL C (the kernels) and as host C99 (host code and tests). OpenCL C appears
  * elsewhere only in the OpenCL branch of vecmath.h (vector operators and built-ins) and
@@ -27,6 +27,7 @@
 #define CW_FORCE_INLINE static inline __attribute__((always_inline))
 
 typedef float4 cw_float4;
+typedef int4 cw_int4; /* a lane mask of four: -1 true, 0 false */
 typedef float3 vec3;
 /* the lanes of one box test of the wide BVH */
 #if CW_BVH_WIDTH == 8
@@ -84,6 +85,10 @@ CW_INLINE void cw_atomic_add(volatile __global float *p, float v)
 typedef struct {
     float x, y, z, w;
 } __attribute__((aligned(16))) cw_float4;
+
+typedef struct {
+    int x, y, z, w;
+} cw_int4;
 
 typedef struct {
     float x, y, z;

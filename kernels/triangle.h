@@ -135,7 +135,9 @@ CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo 
 /* The four triangles of block b at once, each lane with exactly isect_triangle's float
  * operations (the same hits, bit for bit): the closest hit in (tmin, tmax), never the
  * triangle whose CW_REF is skip - 1. Returns its lane, the first of equally close ones (as
- * testing them one by one in lane order), or -1. */
+ * testing them one by one in lane order), or -1. The edge-sign and determinant tests are
+ * lane masks, so a block the ray misses (the common case) ends before the division and
+ * without a branch per lane; an unused lane (zero vertices) has det = 0. */
 CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float tmin, float tmax,
                          int skip, float *t_out, float *u_out, float *v_out)
 {
@@ -154,26 +156,30 @@ CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float
     cw_float4 u = v4_sub(v4_mul(cx, by), v4_mul(cy, bx));
     cw_float4 v = v4_sub(v4_mul(ax, cy), v4_mul(ay, cx));
     cw_float4 w = v4_sub(v4_mul(bx, ay), v4_mul(by, ax));
-    cw_float4 det = v4_add(v4_add(u, v), w);
-    cw_float4 tt = v4_add(v4_add(v4_mul(u, v4_mul(sz, az)), v4_mul(v, v4_mul(sz, bz))),
-                          v4_mul(w, v4_mul(sz, cz)));
-    cw_float4 inv = v4_div(v4_splat(1.0f), det);
-    float lu[4], lv[4], lw[4], ld[4], lt[4], li[4];
-    int i, best = -1;
-    v4_store(u, lu);
+    cw_float4 zero = v4_splat(0.0f), det = v4_add(v4_add(u, v), w), tt, inv, t;
+    /* isect_triangle's miss: some edge function < 0 and some > 0, or det = 0 */
+    cw_int4 neg = m4_or(m4_or(v4_lt(u, zero), v4_lt(v, zero)), v4_lt(w, zero));
+    cw_int4 pos = m4_or(m4_or(v4_gt(u, zero), v4_gt(v, zero)), v4_gt(w, zero));
+    unsigned m = m4_bits(m4_andnot(m4_and(neg, pos), v4_ne(det, zero)));
+    float lv[4], lw[4], lt[4], li[4];
+    int best = -1;
+    if (m == 0u)
+        return -1;
+    tt = v4_add(v4_add(v4_mul(u, v4_mul(sz, az)), v4_mul(v, v4_mul(sz, bz))),
+                v4_mul(w, v4_mul(sz, cz)));
+    inv = v4_div(v4_splat(1.0f), det);
+    t = v4_mul(tt, inv);
+    m &= m4_bits(m4_and(v4_gt(t, v4_splat(tmin)), v4_lt(t, v4_splat(tmax))));
+    if (m == 0u)
+        return -1;
     v4_store(v, lv);
     v4_store(w, lw);
-    v4_store(det, ld);
-    v4_store(v4_mul(tt, inv), lt);
+    v4_store(t, lt);
     v4_store(inv, li);
-    for (i = 0; i < 4; i++) {
-        int idx = b->index[i];
-        if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip)
-            continue;
-        if ((lu[i] < 0.0f || lv[i] < 0.0f || lw[i] < 0.0f) &&
-            (lu[i] > 0.0f || lv[i] > 0.0f || lw[i] > 0.0f))
-            continue;
-        if (ld[i] == 0.0f || !(lt[i] > tmin && lt[i] < tmax))
+    while (m != 0u) {
+        int i = cw_ctz(m), idx = b->index[i];
+        m &= m - 1u;
+        if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip || !(lt[i] < tmax))
             continue;
         tmax = lt[i];
         *t_out = lt[i];

@@ -46,6 +46,39 @@ CW_INLINE void v4_store(cw_float4 a, float *p)
 {
     vstore4(a, 0, p);
 }
+/* lane masks of four (the triangles of a cw_tri4): comparisons, and, or, and-not, bits */
+CW_INLINE cw_int4 v4_lt(cw_float4 a, cw_float4 b)
+{
+    return a < b;
+}
+CW_INLINE cw_int4 v4_gt(cw_float4 a, cw_float4 b)
+{
+    return a > b;
+}
+CW_INLINE cw_int4 v4_ne(cw_float4 a, cw_float4 b)
+{
+    return a != b;
+}
+CW_INLINE cw_int4 m4_and(cw_int4 a, cw_int4 b)
+{
+    return a & b;
+}
+CW_INLINE cw_int4 m4_or(cw_int4 a, cw_int4 b)
+{
+    return a | b;
+}
+/* ~a & b */
+CW_INLINE cw_int4 m4_andnot(cw_int4 a, cw_int4 b)
+{
+    return ~a & b;
+}
+/* the lanes set, as a bit mask (bit i: lane i) */
+CW_INLINE unsigned m4_bits(cw_int4 m)
+{
+    int4 h = m & (int4)(1, 2, 4, 8);
+    int2 q = h.lo | h.hi;
+    return (unsigned)(q.x | q.y);
+}
 CW_INLINE vec3 v3_add(vec3 a, vec3 b)
 {
     return a + b;
@@ -170,6 +203,44 @@ CW_INLINE void v4_store(cw_float4 a, float *p)
     p[1] = a.y;
     p[2] = a.z;
     p[3] = a.w;
+}
+#define V4_CMP(name, op)                                                                           \
+    CW_INLINE cw_int4 name(cw_float4 a, cw_float4 b)                                               \
+    {                                                                                              \
+        cw_int4 r;                                                                                 \
+        r.x = -(a.x op b.x);                                                                       \
+        r.y = -(a.y op b.y);                                                                       \
+        r.z = -(a.z op b.z);                                                                       \
+        r.w = -(a.w op b.w);                                                                       \
+        return r;                                                                                  \
+    }
+V4_CMP(v4_lt, <)
+V4_CMP(v4_gt, >)
+V4_CMP(v4_ne, !=)
+#undef V4_CMP
+#define M4_OP(name, expr)                                                                          \
+    CW_INLINE cw_int4 name(cw_int4 a, cw_int4 b)                                                   \
+    {                                                                                              \
+        cw_int4 r;                                                                                 \
+        r.x = expr(a.x, b.x);                                                                      \
+        r.y = expr(a.y, b.y);                                                                      \
+        r.z = expr(a.z, b.z);                                                                      \
+        r.w = expr(a.w, b.w);                                                                      \
+        return r;                                                                                  \
+    }
+#define M4_AND(a, b) ((a) & (b))
+#define M4_OR(a, b) ((a) | (b))
+#define M4_ANDNOT(a, b) (~(a) & (b))
+M4_OP(m4_and, M4_AND)
+M4_OP(m4_or, M4_OR)
+M4_OP(m4_andnot, M4_ANDNOT)
+#undef M4_OP
+#undef M4_AND
+#undef M4_OR
+#undef M4_ANDNOT
+CW_INLINE unsigned m4_bits(cw_int4 m)
+{
+    return (unsigned)((m.x & 1) | (m.y & 2) | (m.z & 4) | (m.w & 8));
 }
 CW_INLINE vec3 v3_add(vec3 a, vec3 b)
 {
