@@ -133,9 +133,14 @@ CW_INLINE cw_lanes vl_max(cw_lanes a, cw_lanes b)
 {
     return a > b ? a : b;
 }
-/* The lanes where a <= b, as a bit mask (bit i: lane i). */
+/* The lanes where a <= b, as a bit mask (bit i: lane i). On x86 with AVX (PoCL's and
+ * Intel's CPU devices) one movemask of the comparison's sign bits; elsewhere the lanes'
+ * bits or'ed together. */
 CW_INLINE unsigned vl_le_mask(cw_lanes a, cw_lanes b)
 {
+#if CW_BVH_WIDTH == 8 && defined(__AVX__) && defined(__x86_64__)
+    return (unsigned)__builtin_ia32_movmskps256(as_float8(a <= b));
+#else
 #if CW_BVH_WIDTH == 8
     int8 m = (a <= b) & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
     int4 h = m.lo | m.hi;
@@ -144,6 +149,7 @@ CW_INLINE unsigned vl_le_mask(cw_lanes a, cw_lanes b)
 #endif
     int2 q = h.lo | h.hi;
     return (unsigned)(q.x | q.y);
+#endif
 }
 /* p[0, CW_BVH_WIDTH) = the lanes of a */
 CW_INLINE void vl_store(cw_lanes a, float *p)
