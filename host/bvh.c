@@ -284,12 +284,13 @@ double bvh_sah_cost(const bvh *b)
 
 /* ---- the wide tree ------------------------------------------------------------------- */
 
-/* Lane i of node q: the box of binary node n, or (n NULL) an inverted box no ray enters. */
+/* Lane i of node q: the box of binary node n, or (n NULL) a box at +infinity, which no ray
+ * enters (kernels/traverse.h, bvh_boxes). */
 static void set_lane(cw_bvhw_node *q, int i, const cw_bvh_node *n)
 {
     for (int a = 0; a < 3; a++) {
-        q->bound[a].v[i] = n ? n->lo[a] : FLT_MAX;
-        q->bound[3 + a].v[i] = n ? n->hi[a] : -FLT_MAX;
+        q->bound[a].v[i] = n ? n->lo[a] : INFINITY;
+        q->bound[3 + a].v[i] = n ? n->hi[a] : INFINITY;
     }
 }
 

@@ -16,12 +16,10 @@
  * which lets the compiler assume no value is infinite. */
 #define CW_FAR 1e30f /* tmax of camera and secondary rays */
 
-/* A ray with what the tests need precomputed once: the inverse direction and the near
- * planes for the box test (near[a]: the index in cw_bvhw_node.bound of axis a's plane the
- * ray meets first), and the axis permutation and shear of the watertight triangle test. */
+/* A ray with what the tests need precomputed once: the negated inverse direction for the
+ * box test, and the axis permutation and shear of the watertight triangle test. */
 typedef struct {
-    vec3 o, d, inv;
-    int near[3];
+    vec3 o, d, ninv; /* ninv = -1 / d, never infinite */
     int kx, ky, kz;
     float sx, sy, sz;
 } cw_rayinfo;
@@ -44,10 +42,7 @@ CW_INLINE cw_rayinfo isect_rayinfo(vec3 o, vec3 d)
     int tmp;
     ri.o = o;
     ri.d = d;
-    ri.inv = v3(isect_safe_inv(d.x), isect_safe_inv(d.y), isect_safe_inv(d.z));
-    ri.near[0] = ri.inv.x < 0.0f ? 3 : 0;
-    ri.near[1] = ri.inv.y < 0.0f ? 4 : 1;
-    ri.near[2] = ri.inv.z < 0.0f ? 5 : 2;
+    ri.ninv = v3(-isect_safe_inv(d.x), -isect_safe_inv(d.y), -isect_safe_inv(d.z));
     ri.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
     ri.kx = ri.kz == 2 ? 0 : ri.kz + 1;
     ri.ky = ri.kx == 2 ? 0 : ri.kx + 1;

@@ -16,23 +16,24 @@
 #include "world.h"
 
 /* The child boxes of a node against [tmin, tmax] at once: the lanes a ray enters, as a bit
- * mask, and each lane's entry distance in enter[]. Per axis the near plane is the one the
- * ray's direction meets first (ri->near), which gives the slab test's min and max without
- * computing both; an empty lane's inverted box is never entered. The robust path widens
- * the exit by 1 + 2 gamma(3) (Ize 2013). */
+ * mask, and each lane's entry distance in enter[]. Each plane's distance is (o - b) * (-1/d)
+ * (ri->ninv), which is (b - o) / d to the bit and lets the compiler read the node's planes
+ * straight into the subtraction; per axis the nearer of the two planes is the entry, the
+ * farther the exit. An empty lane's box lies at +infinity: every distance is +-infinity
+ * there, and no interval [entry, exit] is left. The robust path widens the exit by
+ * 1 + 2 gamma(3) (Ize 2013). */
 CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo *ri, float tmin,
                              float tmax, float *enter)
 {
     cw_lanes ox = vl_splat(ri->o.x), oy = vl_splat(ri->o.y), oz = vl_splat(ri->o.z);
-    cw_lanes ix = vl_splat(ri->inv.x), iy = vl_splat(ri->inv.y), iz = vl_splat(ri->inv.z);
-    cw_lanes nx = vl_mul(vl_sub(nd->bound[ri->near[0]], ox), ix);
-    cw_lanes ny = vl_mul(vl_sub(nd->bound[ri->near[1]], oy), iy);
-    cw_lanes nz = vl_mul(vl_sub(nd->bound[ri->near[2]], oz), iz);
-    cw_lanes fx = vl_mul(vl_sub(nd->bound[3 - ri->near[0]], ox), ix);
-    cw_lanes fy = vl_mul(vl_sub(nd->bound[5 - ri->near[1]], oy), iy);
-    cw_lanes fz = vl_mul(vl_sub(nd->bound[7 - ri->near[2]], oz), iz);
-    cw_lanes te = vl_max(vl_max(nx, ny), vl_max(nz, vl_splat(tmin)));
-    cw_lanes tx = vl_min(vl_min(fx, fy), vl_min(fz, vl_splat(tmax)));
+    cw_lanes ix = vl_splat(ri->ninv.x), iy = vl_splat(ri->ninv.y), iz = vl_splat(ri->ninv.z);
+    cw_lanes ax = vl_mul(vl_sub(ox, nd->bound[0]), ix), bx = vl_mul(vl_sub(ox, nd->bound[3]), ix);
+    cw_lanes ay = vl_mul(vl_sub(oy, nd->bound[1]), iy), by = vl_mul(vl_sub(oy, nd->bound[4]), iy);
+    cw_lanes az = vl_mul(vl_sub(oz, nd->bound[2]), iz), bz = vl_mul(vl_sub(oz, nd->bound[5]), iz);
+    cw_lanes te = vl_max(vl_max(vl_min(ax, bx), vl_min(ay, by)),
+                         vl_max(vl_min(az, bz), vl_splat(tmin)));
+    cw_lanes tx = vl_min(vl_min(vl_max(ax, bx), vl_max(ay, by)),
+                         vl_min(vl_max(az, bz), vl_splat(tmax)));
 #if !CW_FAST
     tx = vl_mul(tx, vl_splat(1.0000004f));
 #endif

@@ -100,9 +100,8 @@ typedef struct {
 
 /* A node of the wide BVH the kernels traverse, collapsed from the host's binary one
  * (host/bvh.h): the boxes of up to CW_BVH_WIDTH children side by side, for one box test
- * over all lanes. bound[0..2]: lower corners (x, y, z), bound[3..5]: upper corners, so a
- * ray picks each axis's near plane by the sign of its direction. An empty slot has an
- * inverted box (lower > upper), which no ray hits. */
+ * over all lanes. bound[0..2]: lower corners (x, y, z), bound[3..5]: upper corners. An
+ * empty slot's box lies at +infinity (both corners), which no ray enters (bvh_boxes). */
 typedef struct {
     cw_lanes bound[6];
     int child[CW_BVH_WIDTH]; /* interior child: its node index; leaf: first entry in refs */

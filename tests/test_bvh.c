@@ -1136,7 +1136,7 @@ static void test_root_split_reference(void **state)
 
 /* Walks the wide tree from node k: every lane's box must equal the binary node it came
  * from (checked through containment of what lies below), an empty lane's box must be
- * inverted (no ray enters it), every primitive must be reached once, and the stack a
+ * at +infinity (no ray enters it), every primitive must be reached once, and the stack a
  * traversal needs must stay within what bvh_collapse_wide reports. */
 static int walk_wide(const bvhw *q, const bvh *t, const bvh_box *boxes, int k, int *seen,
                      int *reached)
@@ -1151,11 +1151,13 @@ static int walk_wide(const bvhw *q, const bvh *t, const bvh_box *boxes, int k, i
             lo[a] = nd->bound[a].v[i];
             hi[a] = nd->bound[3 + a].v[i];
         }
-        if (c < 0) {
+        if (c == -1) { /* empty: a box at +infinity */
             for (a = 0; a < 3; a++)
-                assert_true(lo[a] > hi[a]);
+                assert_true(lo[a] == INFINITY && hi[a] == INFINITY);
             continue;
         }
+        if (c < 0) /* blocks of triangles: not packed here */
+            fail_msg("node %d lane %d: count %d before packing", k, i, c);
         if (c > 0) {
             for (j = nd->child[i]; j < nd->child[i] + c; j++) {
                 int p = t->refs[j];
