@@ -225,7 +225,7 @@ static int build(bvh *out, const bvh_box *boxes, const unsigned char *blocks, in
             bd.w[i].hi[a] = boxes[i].hi[a];
         }
         bd.w[i].idx = i;
-        bd.w[i].block = blocks && blocks[i] ? 1 : 0;
+        bd.w[i].block = blocks && blocks[i] <= BVH_BLOCK_CLASSES ? blocks[i] : 0;
     }
     bd.max_leaf = max_leaf;
     bd.threads = n >= PAR_MIN_PRIMS ? thread_count(threads) : 1;

@@ -51,10 +51,14 @@ int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, si
  * from config.h). The tree is the same, bit for bit, for every thread count. */
 int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int threads, char *err,
                       size_t errlen);
-/* bvh_build_threads where blocks[i] != 0 marks box i as a primitive the kernels test
- * SAH_BLOCK (4) at a time in a leaf of such primitives only (triangles: cw_tri4), so that
- * the SAH prices such a leaf of n at ceil(n / 4) tests and prefers full blocks; blocks may
- * be NULL (none marked: bvh_build_threads' tree). threads <= 0: one per online core. */
+/* Block classes: primitives the kernels test four at a time in a leaf of one class only
+ * (triangles: cw_tri4, spheres: cw_sph4). */
+#define BVH_BLOCK_CLASSES 2
+
+/* bvh_build_threads where blocks[i] (0 .. BVH_BLOCK_CLASSES) gives box i's block class: the
+ * SAH prices a leaf of n primitives of one class at ceil(n / 4) tests, so it prefers full
+ * blocks; 0 (or blocks NULL) is a primitive tested alone (bvh_build_threads' tree). threads
+ * <= 0: one per online core. */
 int bvh_build_blocks(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n,
                      int max_leaf, int threads, char *err, size_t errlen);
 void bvh_free(bvh *b);

@@ -116,7 +116,7 @@ typedef struct {
 typedef struct {
     bin box[3][MAX_BINS];
     int count[3][MAX_BINS];
-    int blocked[3][MAX_BINS]; /* of count, the primitives marked block */
+    int blocked[BVH_BLOCK_CLASSES][3][MAX_BINS]; /* of count, those of each block class */
 } bins;
 
 _Static_assert(sizeof(sah_prim) == 32, "sah_prim is 32 bytes");
@@ -206,7 +206,8 @@ static void bin_range(const sah_prim *w, int begin, int end, const float clo[3],
             box_empty(bn->box[a][b].lo, bn->box[a][b].hi);
             bn->box[a][b].lo[3] = bn->box[a][b].hi[3] = 0.0f;
             bn->count[a][b] = 0;
-            bn->blocked[a][b] = 0;
+            for (int c = 0; c < BVH_BLOCK_CLASSES; c++)
+                bn->blocked[c][a][b] = 0;
         }
     }
     for (int i = begin; i < end; i++) {
@@ -218,7 +219,8 @@ static void bin_range(const sah_prim *w, int begin, int end, const float clo[3],
             v4_store(b->lo, v4_min(lo, v4_load3(b->lo)));
             v4_store(b->hi, v4_max(hi, v4_load3(b->hi)));
             bn->count[a][k[a]]++;
-            bn->blocked[a][k[a]] += w[i].block;
+            if (w[i].block > 0)
+                bn->blocked[w[i].block - 1][a][k[a]]++;
         }
     }
 }
@@ -265,7 +267,8 @@ static void bin_parallel(const sah_prim *w, int begin, int end, const float clo[
         for (int a = 0; a < 3; a++) {
             for (int b = 0; b < nb; b++) {
                 bn->count[a][b] += part[k].bn.count[a][b];
-                bn->blocked[a][b] += part[k].bn.blocked[a][b];
+                for (int c = 0; c < BVH_BLOCK_CLASSES; c++)
+                    bn->blocked[c][a][b] += part[k].bn.blocked[c][a][b];
                 box_grow(bn->box[a][b].lo, bn->box[a][b].hi, part[k].bn.box[a][b].lo,
                          part[k].bn.box[a][b].hi);
             }
@@ -273,26 +276,30 @@ static void bin_parallel(const sah_prim *w, int begin, int end, const float clo[
     }
 }
 
-/* The SAH intersection cost (in C_ISECT) of a leaf of n primitives, nb of them marked
- * block: blocks of SAH_BLOCK where all are, else one test each. */
-static inline double leaf_cost(int n, int nb)
+/* The SAH intersection cost (in C_ISECT) of a leaf of n primitives, nb[c] of them of
+ * block class c + 1: blocks of SAH_BLOCK where all are of one class, else one test each. */
+static inline double leaf_cost(int n, const int nb[BVH_BLOCK_CLASSES])
 {
-    return nb == n ? (double)((n + SAH_BLOCK - 1) / SAH_BLOCK) : (double)n;
+    for (int c = 0; c < BVH_BLOCK_CLASSES; c++)
+        if (nb[c] == n)
+            return (double)((n + SAH_BLOCK - 1) / SAH_BLOCK);
+    return (double)n;
 }
 
 /* Best binned SAH split of w[begin, end) whose doubled centroids span [clo, chi], with
  * nb bins per axis, binned on `threads` threads. Returns the cost relative to the node area
  * (C_trav + sum of child area * leaf_cost(child) / node area), or INFINITY when no bin
  * boundary separates the primitives; sets *axis, *split (the first bin of the second
- * child) and the bin scales, and *nblocked to the primitives marked block. */
+ * child) and the bin scales, and nblocked[c] to the primitives of block class c + 1. */
 static double best_split(const sah_prim *w, int begin, int end, const float clo[3],
                          const float chi[3], double node_area, int nb, int threads, float scale[3],
-                         int *axis, int *split, int *nblocked)
+                         int *axis, int *split, int nblocked[BVH_BLOCK_CLASSES])
 {
     bins bn;
     double best = INFINITY;
     int first_axis = 1;
-    *nblocked = 0;
+    for (int c = 0; c < BVH_BLOCK_CLASSES; c++)
+        nblocked[c] = 0;
     for (int a = 0; a < 3; a++) {
         float ext = chi[a] - clo[a];
         scale[a] = ext > 0.0f ? (float)nb / ext : 0.0f;
@@ -305,13 +312,14 @@ static double best_split(const sah_prim *w, int begin, int end, const float clo[
         double right_area[MAX_BINS], right_cost[MAX_BINS];
         int right_count[MAX_BINS];
         float lo[3], hi[3];
-        int count = 0, blocked = 0;
+        int count = 0, blocked[BVH_BLOCK_CLASSES] = {0};
         if (scale[a] == 0.0f)
             continue;
         box_empty(lo, hi);
         for (int b = nb - 1; b > 0; b--) {
             count += bn.count[a][b];
-            blocked += bn.blocked[a][b];
+            for (int c = 0; c < BVH_BLOCK_CLASSES; c++)
+                blocked[c] += bn.blocked[c][a][b];
             right_count[b] = count;
             right_cost[b] = leaf_cost(count, blocked);
             if (bn.count[a][b] > 0)
@@ -319,18 +327,22 @@ static double best_split(const sah_prim *w, int begin, int end, const float clo[
             right_area[b] = count > 0 ? box_area(lo, hi) : 0.0;
         }
         if (first_axis) { /* every primitive is in one bin of each binned axis */
-            *nblocked = blocked + bn.blocked[a][0];
+            for (int c = 0; c < BVH_BLOCK_CLASSES; c++)
+                nblocked[c] = blocked[c] + bn.blocked[c][a][0];
             first_axis = 0;
         }
         box_empty(lo, hi);
-        count = blocked = 0;
+        count = 0;
+        for (int c = 0; c < BVH_BLOCK_CLASSES; c++)
+            blocked[c] = 0;
         for (int b = 1; b < nb; b++) {
             double cost;
             if (bn.count[a][b - 1] == 0)
                 continue; /* the same split as the previous boundary */
             box_grow(lo, hi, bn.box[a][b - 1].lo, bn.box[a][b - 1].hi);
             count += bn.count[a][b - 1];
-            blocked += bn.blocked[a][b - 1];
+            for (int c = 0; c < BVH_BLOCK_CLASSES; c++)
+                blocked[c] += bn.blocked[c][a][b - 1];
             if (right_count[b] == 0)
                 break;
             cost = box_area(lo, hi) * leaf_cost(count, blocked) + right_area[b] * right_cost[b];
@@ -477,11 +489,12 @@ int sah_build_nodes(sah_builder *bd, cw_bvh_node *nodes, const sah_task *root, i
         left = &stack[sp + 1];
         if (!coincident && t.depth + 1 + median_levels(count - 1, max_leaf) <= BVH_MAX_DEPTH) {
             float scale[3];
-            int split = 0, nb = count < MAX_BINS ? count : MAX_BINS, nblocked = 0;
+            int split = 0, nb = count < MAX_BINS ? count : MAX_BINS;
+            int nblocked[BVH_BLOCK_CLASSES];
             int threads = top ? count / PAR_BIN_MIN : 1; /* enough work for each */
             threads = threads < 1 ? 1 : (threads > bd->threads ? bd->threads : threads);
             double cost = best_split(w, t.begin, t.end, t.clo, t.chi, box_area(t.lo, t.hi), nb,
-                                     threads, scale, &axis, &split, &nblocked);
+                                     threads, scale, &axis, &split, nblocked);
             if (cost < C_ISECT * leaf_cost(count, nblocked) ||
                 (count > max_leaf && cost < INFINITY)) {
                 partition_bins(w, &t, axis, split, scale[axis], (float)(nb - 1), left, right);

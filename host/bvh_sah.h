@@ -9,8 +9,9 @@
 
 #define C_TRAV 1.0  /* SAH cost of visiting an interior node */
 #define C_ISECT 1.0 /* SAH cost of testing one primitive, or one block of SAH_BLOCK */
-/* Primitives marked `block` are tested SAH_BLOCK at a time where a leaf holds only such
- * primitives (the kernels' cw_tri4): such a leaf of n costs C_ISECT * ceil(n / SAH_BLOCK). */
+/* Primitives of a block class (1 .. BVH_BLOCK_CLASSES) are tested SAH_BLOCK at a time where
+ * a leaf holds only primitives of that class (the kernels' cw_tri4 and cw_sph4): such a leaf
+ * of n costs C_ISECT * ceil(n / SAH_BLOCK). */
 #define SAH_BLOCK 4
 
 /* One primitive in the working array: its box and input index (32 bytes). */
@@ -18,7 +19,7 @@ typedef struct {
     float lo[3];
     int idx; /* index into the input boxes */
     float hi[3];
-    int block; /* 1: tested SAH_BLOCK at a time in a leaf of such primitives only */
+    int block; /* block class: 0 none, 1 .. BVH_BLOCK_CLASSES (see SAH_BLOCK) */
 } sah_prim;
 
 /* A node to make: its range of the working array and what is known of it. */

@@ -23,6 +23,7 @@
     X(spheres, ds->sph, ds->nsph)                                                                  \
     X(triangles, ds->tri, ds->ntri)                                                                \
     X(tri_blocks, ds->tri_blocks, ds->nblocks)                                                     \
+    X(sph_blocks, ds->sph_blocks, ds->nsph_blocks)                                                 \
     X(normals, ds->normals, ds->nnorm)                                                             \
     X(polygons, ds->pg, ds->npg)                                                                   \
     X(poly_verts, ds->verts, ds->nverts)                                                           \
@@ -89,6 +90,7 @@ void devscene_free(devscene *ds)
     free(ds->sph);
     free(ds->tri);
     free(ds->tri_blocks);
+    free(ds->sph_blocks);
     free(ds->normals);
     free(ds->pg);
     free(ds->verts);
@@ -375,13 +377,21 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
     return 0;
 }
 
-/* Whether the leaf of count references from refs[first] holds triangles only. */
-static int all_triangles(const int *refs, int first, int count)
+/* The kind of block a leaf of count references from refs[first] packs into: triangles
+ * (CW_PRIM_TRIANGLE) or spheres (CW_PRIM_SPHERE) when it holds two or more of that kind
+ * only, else 0 (a leaf of one stays a reference: a block of one tests no faster). */
+static int leaf_block_kind(const int *refs, int first, int count)
 {
-    for (int k = first; k < first + count; k++)
-        if (CW_REF_KIND(refs[k]) != CW_PRIM_TRIANGLE)
+    int kind;
+    if (count < 2)
+        return 0;
+    kind = CW_REF_KIND(refs[first]);
+    if (kind != CW_PRIM_TRIANGLE && kind != CW_PRIM_SPHERE)
+        return 0;
+    for (int k = first + 1; k < first + count; k++)
+        if (CW_REF_KIND(refs[k]) != kind)
             return 0;
-    return 1;
+    return kind;
 }
 
 static void set_lane(cw_float4 *v, int lane, float x)
@@ -390,97 +400,137 @@ static void set_lane(cw_float4 *v, int lane, float x)
     *f = x;
 }
 
-/* The blocks the leaves of wide nodes [n0, n1) need (see pack_nodes). */
-static size_t count_blocks(const devscene *ds, int n0, int n1)
+/* The triangle and sphere blocks the leaves of wide nodes [n0, n1) need (see pack_nodes). */
+static void count_blocks(const devscene *ds, int n0, int n1, size_t *ntb, size_t *nsb)
 {
-    size_t nblocks = 0;
+    *ntb = *nsb = 0;
     for (int n = n0; n < n1; n++)
         for (int i = 0; i < CW_BVH_WIDTH; i++) {
             int c = ds->tree_wide.nodes[n].count[i];
-            if (c >= 2 && all_triangles(ds->refs, ds->tree_wide.nodes[n].child[i], c))
-                nblocks += ((size_t)c + 3) / 4;
+            int kind = c > 0 ? leaf_block_kind(ds->refs, ds->tree_wide.nodes[n].child[i], c) : 0;
+            if (kind == CW_PRIM_TRIANGLE)
+                *ntb += ((size_t)c + 3) / 4;
+            else if (kind == CW_PRIM_SPHERE)
+                *nsb += ((size_t)c + 3) / 4;
         }
-    return nblocks;
 }
 
-/* Packs the leaves of wide nodes [n0, n1) into blocks from ds->tri_blocks[b] on. */
-static void pack_nodes(devscene *ds, int n0, int n1, size_t b)
+/* Packs the c triangles of a leaf from refs[first] into blocks from ds->tri_blocks[b]. */
+static void pack_triangles(devscene *ds, int first, int c, size_t b)
+{
+    for (int k = 0; k < c; k++) {
+        cw_tri4 *blk = &ds->tri_blocks[b + (size_t)k / 4];
+        int idx = CW_REF_INDEX(ds->refs[first + k]), lane = k % 4;
+        const cw_float4 *p[3] = {&ds->tri[idx].p0, &ds->tri[idx].p1, &ds->tri[idx].p2};
+        for (int v = 0; v < 3; v++) {
+            set_lane(&blk->v[3 * v], lane, p[v]->x);
+            set_lane(&blk->v[3 * v + 1], lane, p[v]->y);
+            set_lane(&blk->v[3 * v + 2], lane, p[v]->z);
+        }
+        blk->index[lane] = idx;
+    }
+    for (int k = c; k % 4 != 0; k++)
+        ds->tri_blocks[b + (size_t)k / 4].index[k % 4] = -1;
+}
+
+/* Packs the c spheres of a leaf from refs[first] into blocks from ds->sph_blocks[b]. */
+static void pack_spheres(devscene *ds, int first, int c, size_t b)
+{
+    for (int k = 0; k < c; k++) {
+        cw_sph4 *blk = &ds->sph_blocks[b + (size_t)k / 4];
+        int idx = CW_REF_INDEX(ds->refs[first + k]), lane = k % 4;
+        const cw_float4 *ce = &ds->sph[idx].center;
+        set_lane(&blk->cx, lane, ce->x);
+        set_lane(&blk->cy, lane, ce->y);
+        set_lane(&blk->cz, lane, ce->z);
+        set_lane(&blk->r, lane, ce->w);
+        blk->index[lane] = idx;
+    }
+    for (int k = c; k % 4 != 0; k++)
+        ds->sph_blocks[b + (size_t)k / 4].index[k % 4] = -1;
+}
+
+/* Packs the leaves of wide nodes [n0, n1) into blocks from ds->tri_blocks[tb] and
+ * ds->sph_blocks[sb] on. */
+static void pack_nodes(devscene *ds, int n0, int n1, size_t tb, size_t sb)
 {
     for (int n = n0; n < n1; n++)
         for (int i = 0; i < CW_BVH_WIDTH; i++) {
             cw_bvhw_node *nd = &ds->tree_wide.nodes[n];
             int c = nd->count[i], first = nd->child[i];
-            if (c < 2 || !all_triangles(ds->refs, first, c))
-                continue;
-            nd->child[i] = (int)b;
-            nd->count[i] = -1 - (c + 3) / 4;
-            for (int k = 0; k < c; k++) {
-                cw_tri4 *blk = &ds->tri_blocks[b + (size_t)k / 4];
-                int idx = CW_REF_INDEX(ds->refs[first + k]), lane = k % 4;
-                const cw_float4 *p[3] = {&ds->tri[idx].p0, &ds->tri[idx].p1, &ds->tri[idx].p2};
-                for (int v = 0; v < 3; v++) {
-                    set_lane(&blk->v[3 * v], lane, p[v]->x);
-                    set_lane(&blk->v[3 * v + 1], lane, p[v]->y);
-                    set_lane(&blk->v[3 * v + 2], lane, p[v]->z);
-                }
-                blk->index[lane] = idx;
+            int kind = c > 0 ? leaf_block_kind(ds->refs, first, c) : 0, nb = (c + 3) / 4;
+            if (kind == CW_PRIM_TRIANGLE) {
+                pack_triangles(ds, first, c, tb);
+                nd->child[i] = (int)tb;
+                nd->count[i] = -1 - nb;
+                tb += (size_t)nb;
+            } else if (kind == CW_PRIM_SPHERE) {
+                pack_spheres(ds, first, c, sb);
+                nd->child[i] = (int)sb;
+                nd->count[i] = -1 - (nb | CW_LEAF_SPHERES);
+                sb += (size_t)nb;
             }
-            for (int k = c; k % 4 != 0; k++)
-                ds->tri_blocks[b + (size_t)k / 4].index[k % 4] = -1;
-            b += ((size_t)c + 3) / 4;
         }
 }
 
-/* One part of the packing: wide nodes [n0, n1), their blocks from b on. */
+/* One part of the packing: wide nodes [n0, n1), their blocks from tb and sb on. */
 typedef struct {
     devscene *ds;
     int n0, n1;
-    size_t b;
+    size_t tb, sb;
 } pack_part;
 
 static void *pack_part_run(void *arg)
 {
     pack_part *pp = arg;
-    pack_nodes(pp->ds, pp->n0, pp->n1, pp->b);
+    pack_nodes(pp->ds, pp->n0, pp->n1, pp->tb, pp->sb);
     return NULL;
 }
 
-/* Packs every leaf of two or more triangles only into blocks of four (cw_tri4, in leaf
- * order, so the kernels test them in the order of the references) and points the leaf at
- * its blocks. A leaf of one triangle stays a reference: a block of one would test no
- * faster and cost 160 bytes for the triangle's 64. The nodes are cut into PACK_PARTS
- * ranges, each counted, then packed on its own thread where the scene is big (the same
- * blocks as one pass in order). */
-static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
+/* Packs every leaf of two or more triangles only, or two or more spheres only, into blocks
+ * of four (cw_tri4, cw_sph4; in leaf order, so the kernels test them in the order of the
+ * references) and points the leaf at its blocks. A leaf of one primitive stays a
+ * reference: a block of one would test no faster and cost more memory. The nodes are cut
+ * into PACK_PARTS ranges, each counted, then packed on its own thread where the scene is
+ * big (the same blocks as one pass in order). */
+static int pack_leaves(devscene *ds, char *err, size_t errlen)
 {
     pack_part part[PACK_PARTS];
     pthread_t tid[PACK_PARTS];
     int started[PACK_PARTS] = {0}, nn = ds->tree_wide.num_nodes, threaded;
-    size_t nblocks = 0;
+    size_t ntb = 0, nsb = 0;
     for (int k = 0; k < PACK_PARTS; k++) {
+        size_t t, sp;
         part[k].ds = ds;
         part[k].n0 = (int)((long long)nn * k / PACK_PARTS);
         part[k].n1 = (int)((long long)nn * (k + 1) / PACK_PARTS);
-        part[k].b = nblocks;
-        nblocks += count_blocks(ds, part[k].n0, part[k].n1);
+        part[k].tb = ntb;
+        part[k].sb = nsb;
+        count_blocks(ds, part[k].n0, part[k].n1, &t, &sp);
+        ntb += t;
+        nsb += sp;
     }
-    if (nblocks == 0)
+    if (ntb == 0 && nsb == 0)
         return 0;
-    ds->tri_blocks = calloc(nblocks, sizeof *ds->tri_blocks);
-    if (!ds->tri_blocks) {
-        snprintf(err, errlen, "out of memory for %zu triangle blocks", nblocks);
+    if (ntb > 0 && !(ds->tri_blocks = calloc(ntb, sizeof *ds->tri_blocks))) {
+        snprintf(err, errlen, "out of memory for %zu triangle blocks", ntb);
         return -1;
     }
-    threaded = nblocks >= PACK_PAR_BLOCKS;
-    for (int k = 1; threaded && k < PACK_PARTS; k++)
-        started[k] = pthread_create(&tid[k], NULL, pack_part_run, &part[k]) == 0;
-    for (int k = 0; k < PACK_PARTS; k++) /* this thread: its part and any not started */
+    if (nsb > 0 && !(ds->sph_blocks = calloc(nsb, sizeof *ds->sph_blocks))) {
+        snprintf(err, errlen, "out of memory for %zu sphere blocks", nsb);
+        return -1;
+    }
+    threaded = ntb + nsb >= PACK_PAR_BLOCKS;
+    for (int k = 1; k < PACK_PARTS; k++)
+        started[k] = threaded && pthread_create(&tid[k], NULL, pack_part_run, &part[k]) == 0;
+    for (int k = 0; k < PACK_PARTS; k++)
         if (!started[k])
             pack_part_run(&part[k]);
     for (int k = 1; k < PACK_PARTS; k++)
         if (started[k])
             pthread_join(tid[k], NULL);
-    ds->nblocks = (int)nblocks;
+    ds->nblocks = (int)ntb;
+    ds->nsph_blocks = (int)nsb;
     return 0;
 }
 
@@ -489,14 +539,17 @@ static int pack_triangle_leaves(devscene *ds, char *err, size_t errlen)
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
 {
     int i, rc;
-    /* triangles are tested four at a time in a leaf of triangles only (pack_triangle_leaves) */
+    /* triangles (class 1) and spheres (class 2) are tested four at a time in a leaf of one
+     * kind only (pack_leaves) */
     unsigned char *blocks = malloc(ds->nbox > 0 ? (size_t)ds->nbox : 1);
     if (!blocks) {
         snprintf(err, errlen, "out of memory for the BVH");
         return -1;
     }
     for (i = 0; i < ds->nbox; i++)
-        blocks[i] = CW_REF_KIND(ds->box_ref[i]) == CW_PRIM_TRIANGLE;
+        blocks[i] = CW_REF_KIND(ds->box_ref[i]) == CW_PRIM_TRIANGLE ? 1
+                    : CW_REF_KIND(ds->box_ref[i]) == CW_PRIM_SPHERE ? 2
+                                                                    : 0;
     rc = bvh_build_blocks(&ds->tree, ds->boxes, blocks, ds->nbox, 4, CW_BVH_THREADS, err, errlen);
     free(blocks);
     if (rc != 0)
@@ -532,5 +585,5 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
     ds->tree.nodes = NULL;
     if (devinst_build(ds, err, errlen) != 0)
         return -1;
-    return pack_triangle_leaves(ds, err, errlen);
+    return pack_leaves(ds, err, errlen);
 }

@@ -28,6 +28,7 @@ typedef struct {
     cw_sphere *sph;
     cw_triangle *tri;
     cw_tri4 *tri_blocks; /* the leaves of triangles only, four to a block */
+    cw_sph4 *sph_blocks; /* the leaves of spheres only, four to a block */
     cw_float4 *normals;
     cw_polygon *pg;
     cw_float4 *verts;
@@ -47,7 +48,7 @@ typedef struct {
     int nmesh_box;
     int *bands; /* edge bands of large polygons (cw_polygon) */
     size_t nbands, bands_cap;
-    int nsph, ntri, nnorm, npg, nverts, ncone, nbox, nblocks;
+    int nsph, ntri, nnorm, npg, nverts, ncone, nbox, nblocks, nsph_blocks;
     bvh tree; /* the binary tree: after devscene_build_bvh only its counts and depth */
     bvhw tree_wide;
     int dropped;      /* primitives left out as degenerate */

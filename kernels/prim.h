@@ -83,6 +83,27 @@ CW_FORCE_INLINE void prim_tri4(const cw_world *w, int block, const cw_rayinfo *r
 }
 #endif
 
+#if CW_HAS_SPHERES
+/* The four spheres of block `block` (a leaf of spheres only): on a hit closer than *tmax,
+ * records it in *hit and lowers *tmax. */
+CW_FORCE_INLINE void prim_sph4(const cw_world *w, int block, const cw_rayinfo *ri, float tmin,
+                               float *tmax, cw_hit *hit)
+{
+    CW_GLOBAL const cw_sph4 *b = &w->sph_blocks[block];
+    float t = 0.0f;
+    int lane = isect_sph4(b, ri->o, ri->d, tmin, *tmax, &t);
+    if (lane >= 0) {
+        *tmax = t;
+        hit->t = t;
+        hit->u = 0.0f;
+        hit->v = 0.0f;
+        hit->kind = CW_PRIM_SPHERE;
+        hit->index = b->index[lane];
+        hit->inst = 0;
+    }
+}
+#endif
+
 /* The surface at a hit (not a miss) of the ray o + t d: the kind's surface_* function,
  * given the point o + t d. */
 CW_INLINE cw_surface prim_surface(const cw_world *w, cw_hit hit, vec3 o, vec3 d)

@@ -23,17 +23,16 @@
 CW_INLINE int isect_sphere(CW_GLOBAL const cw_sphere *s, vec3 o, vec3 d, float tmin, float tmax,
                            float *t_out)
 {
-    vec3 c = v3_from4(s->center);
     float r = s->center.w; /* < 0: visible from inside only */
-    vec3 f = v3_sub(o, c);
-    float b = v3_dot(f, d);
-    float cc, t0, t1, tmp;
-    vec3 perp = v3_sub(f, v3_scale(d, b));
-    float disc = r * r - v3_dot(perp, perp);
-    float q;
+    /* the dot products written out, in isect_sph4's order (a library dot may fuse) */
+    float fx = o.x - s->center.x, fy = o.y - s->center.y, fz = o.z - s->center.z;
+    float b = fx * d.x + fy * d.y + fz * d.z;
+    float px = fx - d.x * b, py = fy - d.y * b, pz = fz - d.z * b;
+    float disc = r * r - (px * px + py * py + pz * pz);
+    float cc, t0, t1, tmp, q;
     if (disc < 0.0f)
         return 0;
-    cc = v3_dot(f, f) - r * r;
+    cc = (fx * fx + fy * fy + fz * fz) - r * r;
     q = -b - (b >= 0.0f ? 1.0f : -1.0f) * cw_sqrt(disc);
     if (q == 0.0f) /* ray starts at the centre of a zero-radius sphere */
         return 0;
@@ -53,6 +52,58 @@ CW_INLINE int isect_sphere(CW_GLOBAL const cw_sphere *s, vec3 o, vec3 d, float t
         return 1;
     }
     return 0;
+}
+
+/* The four spheres of block b at once, each lane with exactly isect_sphere's float
+ * operations (the same hits, bit for bit): the closest hit in (tmin, tmax). Returns its
+ * lane, the first of equally close ones (as testing them one by one in lane order), or -1.
+ * Each lane's hit is the one isect_sphere finds below tmax; testing them in order with
+ * the lowered tmax keeps a lane's hit exactly when it is below the current tmax, since
+ * its far root can only count where the near one does not. */
+CW_INLINE int isect_sph4(CW_GLOBAL const cw_sph4 *b, vec3 o, vec3 d, float tmin, float tmax,
+                         float *t_out)
+{
+    cw_float4 zero = v4_splat(0.0f), r = b->r;
+    cw_float4 dx = v4_splat(d.x), dy = v4_splat(d.y), dz = v4_splat(d.z);
+    cw_float4 fx = v4_sub(v4_splat(o.x), b->cx), fy = v4_sub(v4_splat(o.y), b->cy);
+    cw_float4 fz = v4_sub(v4_splat(o.z), b->cz);
+    cw_float4 bb = v4_add(v4_add(v4_mul(fx, dx), v4_mul(fy, dy)), v4_mul(fz, dz));
+    cw_float4 px = v4_sub(fx, v4_mul(dx, bb)), py = v4_sub(fy, v4_mul(dy, bb));
+    cw_float4 pz = v4_sub(fz, v4_mul(dz, bb));
+    cw_float4 rr = v4_mul(r, r);
+    cw_float4 disc = v4_sub(rr, v4_add(v4_add(v4_mul(px, px), v4_mul(py, py)), v4_mul(pz, pz)));
+    cw_float4 cc, q, t0, t1, lo, hi, t;
+    cw_int4 swap, near, far;
+    float lt[4];
+    unsigned m = ~m4_bits(v4_lt(disc, zero)) & 15u; /* isect_sphere's disc < 0: a miss */
+    int i, best = -1;
+    if (m == 0u)
+        return -1;
+    cc = v4_sub(v4_add(v4_add(v4_mul(fx, fx), v4_mul(fy, fy)), v4_mul(fz, fz)), rr);
+    q = v4_sub(v4_mul(bb, v4_splat(-1.0f)),
+               v4_mul(v4_select(v4_ge(bb, zero), v4_splat(1.0f), v4_splat(-1.0f)), v4_sqrt(disc)));
+    t0 = q;
+    t1 = v4_div(cc, q);
+    swap = v4_gt(t0, t1);
+    lo = v4_select(swap, t1, t0);
+    hi = v4_select(swap, t0, t1);
+    near = m4_and(m4_and(v4_gt(lo, v4_splat(tmin)), v4_lt(lo, v4_splat(tmax))), v4_gt(r, zero));
+    far = m4_and(v4_gt(hi, v4_splat(tmin)), v4_lt(hi, v4_splat(tmax)));
+    m &= m4_bits(m4_and(m4_or(near, far), v4_ne(q, zero)));
+    if (m == 0u)
+        return -1;
+    t = v4_select(near, lo, hi);
+    v4_store(t, lt);
+    while (m != 0u) {
+        i = cw_ctz(m);
+        m &= m - 1u;
+        if (b->index[i] < 0 || !(lt[i] < tmax))
+            continue;
+        tmax = lt[i];
+        *t_out = lt[i];
+        best = i;
+    }
+    return best;
 }
 
 /* The surface at a sphere hit; p = o + t d is projected back onto the sphere. The

@@ -30,10 +30,10 @@ CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo 
     cw_lanes ax = vl_mul(vl_sub(ox, nd->bound[0]), ix), bx = vl_mul(vl_sub(ox, nd->bound[3]), ix);
     cw_lanes ay = vl_mul(vl_sub(oy, nd->bound[1]), iy), by = vl_mul(vl_sub(oy, nd->bound[4]), iy);
     cw_lanes az = vl_mul(vl_sub(oz, nd->bound[2]), iz), bz = vl_mul(vl_sub(oz, nd->bound[5]), iz);
-    cw_lanes te = vl_max(vl_max(vl_min(ax, bx), vl_min(ay, by)),
-                         vl_max(vl_min(az, bz), vl_splat(tmin)));
-    cw_lanes tx = vl_min(vl_min(vl_max(ax, bx), vl_max(ay, by)),
-                         vl_min(vl_max(az, bz), vl_splat(tmax)));
+    cw_lanes te =
+        vl_max(vl_max(vl_min(ax, bx), vl_min(ay, by)), vl_max(vl_min(az, bz), vl_splat(tmin)));
+    cw_lanes tx =
+        vl_min(vl_min(vl_max(ax, bx), vl_max(ay, by)), vl_min(vl_max(az, bz), vl_splat(tmax)));
 #if !CW_FAST
     tx = vl_mul(tx, vl_splat(1.0000004f));
 #endif
@@ -104,6 +104,59 @@ CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayi
             return 1;
     }
     return 0;
+}
+#endif
+
+#if CW_HAS_SPHERES || CW_HAS_TRIANGLES
+/* A world leaf of blocks (count < -1, see CW_LEAF_SPHERES): its blocks of spheres or of
+ * triangles in order, never the triangle skip - 1; on a hit closer than *t_best, records it
+ * in *hit and lowers *t_best. */
+CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
+                                       const cw_rayinfo *ri, float tmin, int skip, float *t_best,
+                                       cw_hit *hit)
+{
+    int code = -1 - count;
+#if CW_HAS_SPHERES
+    if (code & CW_LEAF_SPHERES) {
+        int nb = code & (CW_LEAF_SPHERES - 1);
+        for (int k = first; k < first + nb; k++)
+            prim_sph4(w, k, ri, tmin, t_best, hit);
+        return;
+    }
+#endif
+#if CW_HAS_TRIANGLES
+    bvh_closest_blocks(w, first, code, ri, tmin, skip, t_best, hit);
+#else
+    (void)skip;
+#endif
+}
+
+/* Whether the ray meets a world leaf of blocks (count < -1) in (tmin, tmax), never the
+ * triangle skip - 1. */
+CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const cw_rayinfo *ri,
+                                  float tmin, float tmax, int skip)
+{
+    int code = -1 - count;
+#if CW_HAS_SPHERES
+    if (code & CW_LEAF_SPHERES) {
+        int nb = code & (CW_LEAF_SPHERES - 1);
+        for (int k = first; k < first + nb; k++) {
+            float t_lim = tmax;
+            cw_hit hit;
+            hit.kind = CW_PRIM_NONE;
+            prim_sph4(w, k, ri, tmin, &t_lim, &hit);
+            if (hit.kind != CW_PRIM_NONE)
+                return 1;
+        }
+        return 0;
+    }
+#endif
+#if CW_HAS_TRIANGLES
+    return bvh_any_blocks(w, first, code, ri, tmin, tmax, skip);
+#else
+    (void)skip;
+    return 0;
+#endif
 }
 #endif
 
@@ -256,9 +309,9 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
                     if (ref + 1 != wskip)
                         prim_intersect(w, ref, &ri, tmin, &t_best, &hit);
                 }
-#if CW_HAS_TRIANGLES
-            } else if (count < -1) { /* blocks of four triangles */
-                bvh_closest_blocks(w, nd->child[i], -1 - count, &ri, tmin, wskip, &t_best, &hit);
+#if CW_HAS_SPHERES || CW_HAS_TRIANGLES
+            } else if (count < -1) { /* blocks of four spheres or triangles */
+                bvh_closest_leaf_blocks(w, nd->child[i], count, &ri, tmin, wskip, &t_best, &hit);
 #endif
             } else if (count == 0) {
                 bvh_insert(ci, ct, n++, nd->child[i], e);
@@ -302,8 +355,8 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
                 stack[sp++] = nd->child[i];
                 continue;
             }
-#if CW_HAS_TRIANGLES
-            if (count < -1 && bvh_any_blocks(w, nd->child[i], -1 - count, &ri, tmin, tmax, wskip))
+#if CW_HAS_SPHERES || CW_HAS_TRIANGLES
+            if (count < -1 && bvh_any_leaf_blocks(w, nd->child[i], count, &ri, tmin, tmax, wskip))
                 return 1;
 #endif
             for (k = nd->child[i]; k < nd->child[i] + count; k++) {

@@ -49,6 +49,19 @@ typedef struct {
     int index[4];
 } cw_tri4;
 
+/* Up to four spheres of one BVH leaf side by side, for one 4-wide ray-sphere test
+ * (sphere.h): lane i of cx, cy, cz, r is sphere index[i]'s centre and radius (an index into
+ * the sphere array); an unused lane has index -1 and radius 0 at the origin. */
+typedef struct {
+    cw_float4 cx, cy, cz, r;
+    int index[4];
+} cw_sph4;
+
+/* The count of a wide-BVH leaf of blocks (cw_bvhw_node.count < -1) is -1 - (nb | kind):
+ * nb blocks, of spheres (cw_sph4) where the CW_LEAF_SPHERES bit is set, else of triangles
+ * (cw_tri4). */
+#define CW_LEAF_SPHERES (1 << 24)
+
 /* An open cone or cylinder (no caps) between a base and an apex disc. */
 typedef struct {
     cw_float4 base; /* xyz: centre of the base disc, w: its radius */
@@ -106,8 +119,9 @@ typedef struct {
     cw_lanes bound[6];
     int child[CW_BVH_WIDTH]; /* interior child: its node index; leaf: first entry in refs */
     int count[CW_BVH_WIDTH]; /* leaf: number of references (> 0), or for a leaf of
-                              * triangles only, -1 - its number of cw_tri4 blocks (< -1),
-                              * child then the first block; interior: 0; empty: -1 */
+                              * triangles only or spheres only, -1 - its number of blocks
+                              * (cw_tri4 or cw_sph4, with CW_LEAF_SPHERES) (< -1), child
+                              * then the first block; interior: 0; empty: -1 */
 } cw_bvhw_node;
 
 /* A mesh placed in the world (a two-level BVH: the top level's leaf entry

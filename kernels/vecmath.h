@@ -59,6 +59,19 @@ CW_INLINE cw_int4 v4_ne(cw_float4 a, cw_float4 b)
 {
     return a != b;
 }
+CW_INLINE cw_int4 v4_ge(cw_float4 a, cw_float4 b)
+{
+    return a >= b;
+}
+/* m ? a : b per lane */
+CW_INLINE cw_float4 v4_select(cw_int4 m, cw_float4 a, cw_float4 b)
+{
+    return select(b, a, m);
+}
+CW_INLINE cw_float4 v4_sqrt(cw_float4 a)
+{
+    return sqrt(a);
+}
 CW_INLINE cw_int4 m4_and(cw_int4 a, cw_int4 b)
 {
     return a & b;
@@ -223,6 +236,7 @@ CW_INLINE void v4_store(cw_float4 a, float *p)
 V4_CMP(v4_lt, <)
 V4_CMP(v4_gt, >)
 V4_CMP(v4_ne, !=)
+V4_CMP(v4_ge, >=)
 #undef V4_CMP
 #define M4_OP(name, expr)                                                                          \
     CW_INLINE cw_int4 name(cw_int4 a, cw_int4 b)                                                   \
@@ -247,6 +261,24 @@ M4_OP(m4_andnot, M4_ANDNOT)
 CW_INLINE unsigned m4_bits(cw_int4 m)
 {
     return (unsigned)((m.x & 1) | (m.y & 2) | (m.z & 4) | (m.w & 8));
+}
+CW_INLINE cw_float4 v4_select(cw_int4 m, cw_float4 a, cw_float4 b)
+{
+    cw_float4 r;
+    r.x = m.x ? a.x : b.x;
+    r.y = m.y ? a.y : b.y;
+    r.z = m.z ? a.z : b.z;
+    r.w = m.w ? a.w : b.w;
+    return r;
+}
+CW_INLINE cw_float4 v4_sqrt(cw_float4 a)
+{
+    cw_float4 r;
+    r.x = sqrtf(a.x);
+    r.y = sqrtf(a.y);
+    r.z = sqrtf(a.z);
+    r.w = sqrtf(a.w);
+    return r;
 }
 CW_INLINE vec3 v3_add(vec3 a, vec3 b)
 {

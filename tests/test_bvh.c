@@ -18,6 +18,7 @@
 #include "config.h"
 #include "devscene.h"
 #include "scene_load.h"
+#include "sphere.h"
 #include "triangle.h"
 
 /* ======================================================================================== */
@@ -941,6 +942,19 @@ static void test_block_leaves(void **state)
     assert_int_equal(mix2.num_nodes, mix.num_nodes);
     assert_memory_equal(mix2.nodes, mix.nodes, (size_t)mix.num_nodes * sizeof *mix.nodes);
     assert_memory_equal(mix2.refs, mix.refs, (size_t)n * sizeof *mix.refs);
+    { /* two classes, in alternate halves of space: leaves of one class each fill up */
+        bvh two;
+        int leaves_two;
+        double m_two;
+        for (int i = 0; i < n; i++)
+            mixed[i] = (unsigned char)(b[i].lo[0] < 5.0f ? 1 : 2);
+        assert_int_equal(bvh_build_blocks(&two, b, mixed, n, 4, 3, err, sizeof err), 0);
+        check_tree(&two, b, n, 4, 1, "two classes");
+        m_two = mean_leaf(&two, &leaves_two);
+        printf("  mean leaf: %.2f with two classes (%d leaves)\n", m_two, leaves_two);
+        assert_true(m_two > 3.0);
+        bvh_free(&two);
+    }
     m_plain = mean_leaf(&plain, &leaves_plain);
     m_blk = mean_leaf(&blk, &leaves_blk);
     m_mixed = mean_leaf(&mix, &leaves_mixed);
@@ -1276,6 +1290,80 @@ static void random_triangle(cw_triangle *t, const cw_triangle *prev)
     }
 }
 
+/* isect_sph4 against isect_sphere on each lane in order (the first closest wins, unused
+ * lanes left out): the same winner and the same t, bit for bit, for rays at the spheres,
+ * grazing them, from inside them, at inside-only (negative radius) and zero-radius ones,
+ * and with tmax cutting between the roots. */
+static void test_sph4_matches_single(void **state)
+{
+    int rays = 0, hits = 0;
+    (void)state;
+    tu_rng_seed(78);
+    for (int trial = 0; trial < 4000; trial++) {
+        cw_sphere sp[4];
+        cw_sph4 b;
+        int used = 1 + (int)(rnd() * 4.0f);
+        memset(&b, 0, sizeof b);
+        memset(sp, 0, sizeof sp);
+        for (int l = 0; l < 4; l++) {
+            float r = rnd_range(0.05f, 1.0f), kind = rnd();
+            sp[l].center.x = rnd_range(-2.0f, 2.0f);
+            sp[l].center.y = rnd_range(-2.0f, 2.0f);
+            sp[l].center.z = rnd_range(-2.0f, 2.0f);
+            sp[l].center.w = kind < 0.15f ? -r : kind < 0.2f ? 0.0f : r;
+            if (l > 0 && kind > 0.9f) /* the same sphere twice: a tie */
+                sp[l] = sp[l - 1];
+            if (l >= used) {
+                b.index[l] = -1;
+                continue;
+            }
+            tri4_lane(&b.cx, l, sp[l].center.x);
+            tri4_lane(&b.cy, l, sp[l].center.y);
+            tri4_lane(&b.cz, l, sp[l].center.z);
+            tri4_lane(&b.r, l, sp[l].center.w);
+            b.index[l] = 20 + l;
+        }
+        for (int r = 0; r < 16; r++) {
+            const cw_sphere *aim = &sp[(int)(rnd() * (float)used)];
+            vec3 c = v3_from4(aim->center), o, target;
+            float rad = cw_fabs(aim->center.w);
+            if (r % 4 == 0) /* from inside the aimed sphere */
+                o = v3_add(c, v3(rad * 0.3f, -rad * 0.2f, rad * 0.1f));
+            else
+                o = v3(rnd_range(-5.0f, 5.0f), rnd_range(-5.0f, 5.0f), rnd_range(-5.0f, 5.0f));
+            target = v3_add(c, v3(rnd_range(-1.0f, 1.0f) * rad, rnd_range(-1.0f, 1.0f) * rad,
+                                  rnd_range(-1.0f, 1.0f) * rad));
+            if (r % 8 == 3) /* grazing: at the rim seen from o */
+                target = v3_add(c, v3(rad, 0.0f, 0.0f));
+            vec3 d = v3_sub(target, o);
+            if (v3_len(d) == 0.0f)
+                continue;
+            d = v3_norm(d);
+            float tmax = r % 5 == 0 ? rnd_range(0.1f, 6.0f) : CW_FAR;
+            float tmin = r % 7 == 0 ? rnd_range(0.0f, 2.0f) : 0.0f;
+            float t1 = 0, best = tmax, t4 = 0;
+            int want = -1;
+            for (int l = 0; l < used; l++) {
+                float t;
+                if (isect_sphere(&sp[l], o, d, tmin, best, &t)) {
+                    best = t;
+                    t1 = t;
+                    want = l;
+                }
+            }
+            int got = isect_sph4(&b, o, d, tmin, tmax, &t4);
+            assert_int_equal(got, want);
+            if (want >= 0) {
+                assert_memory_equal(&t4, &t1, sizeof t1);
+                hits++;
+            }
+            rays++;
+        }
+    }
+    printf("  %d rays, %d hits: isect_sph4 = isect_sphere lane by lane\n", rays, hits);
+    assert_true(hits > rays / 4);
+}
+
 /* isect_tri4 against isect_triangle on each lane in order (the first closest wins, skip
  * and unused lanes left out): the same winner and the same t, u and v, bit for bit, for
  * rays through the triangles, along their edges and past them. */
@@ -1358,7 +1446,7 @@ static void test_tri4_matches_single(void **state)
 static void test_triangle_blocks(void **state)
 {
     char dir[] = "/tmp/cw-test-blocks-XXXXXX", path[64], err[256];
-    int nprims, reached = 0, in_blocks = 0;
+    int nprims, reached = 0, in_blocks = 0, sph_in_blocks = 0;
     FILE *f;
     scene s;
     devscene ds;
@@ -1405,17 +1493,42 @@ static void test_triangle_blocks(void **state)
         for (int i = 0; i < CW_BVH_WIDTH; i++) {
             int c = nd->count[i];
             if (c > 0) {
-                int tris = 0;
+                int tris = 0, sphs = 0;
                 for (int k = nd->child[i]; k < nd->child[i] + c; k++) {
                     int ref = ds.refs[k], idx = CW_REF_INDEX(ref), kind = CW_REF_KIND(ref);
                     tris += kind == CW_PRIM_TRIANGLE;
+                    sphs += kind == CW_PRIM_SPHERE;
                     seen[kind == CW_PRIM_SPHERE     ? idx
                          : kind == CW_PRIM_TRIANGLE ? ds.nsph + idx
                                                     : ds.nsph + ds.ntri + idx]++;
                     reached++;
                 }
-                /* a leaf of two or more triangles only would be blocks */
-                assert_true(tris < c || c == 1);
+                /* a leaf of two or more triangles only or spheres only would be blocks */
+                assert_true((tris < c && sphs < c) || c == 1);
+            } else if (c < -1 && ((-1 - c) & CW_LEAF_SPHERES)) {
+                int nb = (-1 - c) & (CW_LEAF_SPHERES - 1), lanes = 0;
+                assert_true(nd->child[i] >= 0 && nd->child[i] + nb <= ds.nsph_blocks);
+                for (int bk = nd->child[i]; bk < nd->child[i] + nb; bk++)
+                    for (int l = 0; l < 4; l++) {
+                        int idx = ds.sph_blocks[bk].index[l];
+                        const cw_sph4 *sb = &ds.sph_blocks[bk];
+                        if (idx < 0) { /* only the last block has unused lanes, at its end */
+                            assert_int_equal(bk, nd->child[i] + nb - 1);
+                            assert_true(tri4_get(&sb->r, l) == 0.0f);
+                            continue;
+                        }
+                        assert_true(lanes == 4 * (bk - nd->child[i]) + l);
+                        assert_true(idx < ds.nsph);
+                        assert_true(tri4_get(&sb->cx, l) == ds.sph[idx].center.x);
+                        assert_true(tri4_get(&sb->cy, l) == ds.sph[idx].center.y);
+                        assert_true(tri4_get(&sb->cz, l) == ds.sph[idx].center.z);
+                        assert_true(tri4_get(&sb->r, l) == ds.sph[idx].center.w);
+                        seen[idx]++;
+                        reached++;
+                        lanes++;
+                        sph_in_blocks++;
+                    }
+                assert_true(lanes > 4 * (nb - 1) && lanes <= 4 * nb);
             } else if (c < -1) {
                 int nb = -1 - c, lanes = 0;
                 assert_true(nd->child[i] >= 0 && nd->child[i] + nb <= ds.nblocks);
@@ -1448,9 +1561,10 @@ static void test_triangle_blocks(void **state)
     assert_int_equal(reached, nprims);
     for (int k = 0; k < nprims; k++)
         assert_int_equal(seen[k], 1);
-    printf("  %d primitives: %d triangles, %d of them in %d blocks\n", nprims, ds.ntri, in_blocks,
-           ds.nblocks);
+    printf("  %d primitives: %d triangles, %d of them in %d blocks; %d spheres, %d in %d blocks\n",
+           nprims, ds.ntri, in_blocks, ds.nblocks, ds.nsph, sph_in_blocks, ds.nsph_blocks);
     assert_true(in_blocks >= 2400); /* the pairs at least */
+    assert_true(sph_in_blocks > 0);
     free(seen);
     devscene_free(&ds);
     scene_free(&s);
@@ -1462,6 +1576,7 @@ int main(void)
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_collapse_wide),
         cmocka_unit_test(test_tri4_matches_single),
+        cmocka_unit_test(test_sph4_matches_single),
         cmocka_unit_test(test_triangle_blocks),
         cmocka_unit_test(test_empty_and_tiny),
         cmocka_unit_test(test_random_invariants),
