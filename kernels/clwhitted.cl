@@ -24,9 +24,12 @@
  * added to the counters once (the maximum for CW_COUNT_DEPTH): a few atomics per row, no barrier.
  * (A local-memory sum with a barrier after a guarded call let PoCL 3.1 run pix_trace for padded
  * work-items x >= nx of the last row, writing past the image: see docs/portability.md.) */
-__kernel void cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights,
-                       __global const cw_material *materials, __global float *image,
-                       __global int *counters, int row0, int nrows, float sx, float sy)
+/* vec_type_hint(float4): the kernel's own vector width. Intel's CPU compiler otherwise runs
+ * eight work-items in the lanes of one AVX register, and their rays diverge: mount took
+ * 1.58 s against 0.20 s without it at 512x512, gears 2.14 s against 0.32 s (PoCL: no change). */
+__kernel __attribute__((vec_type_hint(float4))) void
+cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_material *materials,
+         __global float *image, __global int *counters, int row0, int nrows, float sx, float sy)
 {
     int lane = (int)get_global_id(0), lanes = (int)get_global_size(0);
     int y = (int)get_global_id(1), x, k;
