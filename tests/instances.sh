@@ -9,26 +9,10 @@ set -u
 B=$(cd "$1" && pwd)
 BIN=$B/clwhitted
 IMGCMP=$B/imgcmp
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-pass=0
-export CLWHITTED_PROGRESS=never
+. "$(dirname "$0")/lib.sh"
 D=tests/scenes/instances
 mkdir -p build/test-output
 
-ok() { pass=$((pass + 1)); }
-bad() { # bad NAME [FILE to show]
-    echo "FAIL: $1"
-    [ $# -gt 1 ] && [ -f "$2" ] && sed 's/^/    /' "$2"
-    fails=$((fails + 1))
-}
-check() { # check NAME EXPECTED_RC ACTUAL_RC
-    if [ "$2" -eq "$3" ]; then ok; else bad "$1: exit $3, expected $2" "$T/err"; fi
-}
-check_grep() { # check_grep NAME PATTERN FILE
-    if grep -q -- "$2" "$3"; then ok; else bad "$1: '$2' not in:" "$3"; fi
-}
 # same NAME A.exr B.exr: imgcmp's default tolerance (a channel within 1e-3 on all but
 # 0.5% of the pixels, mean difference of the others below 1e-4); a diff image on failure
 same() {

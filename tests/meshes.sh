@@ -11,18 +11,8 @@ B=$(cd "$1" && pwd)
 BIN=$B/clwhitted
 MODELS=${2:-/usr/share/assimp/models}
 M=$(pwd)/tests/scenes/mesh
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-pass=0
-export CLWHITTED_PROGRESS=never
-
-ok() { pass=$((pass + 1)); }
-bad() { # bad NAME [FILE to show]
-    echo "FAIL: $1"
-    [ $# -gt 1 ] && [ -f "$2" ] && sed 's/^/    /' "$2" | head -n 20
-    fails=$((fails + 1))
-}
+BAD_LINES=20
+. "$(dirname "$0")/lib.sh"
 
 # run FILE: renders FILE at 32x24 into an empty folder; sets rc, and leaves $T/out,
 # $T/err and the folder's listing in $T/ls

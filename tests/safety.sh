@@ -7,25 +7,8 @@
 set -u
 B=$(cd "$1" && pwd)
 BIN=$B/clwhitted
-T=$(mktemp -d)
+. "$(dirname "$0")/lib.sh"
 chmod 755 "$T"
-trap 'rm -rf "$T"' EXIT
-fails=0
-pass=0
-export CLWHITTED_PROGRESS=never
-
-ok() { pass=$((pass + 1)); }
-bad() { # bad NAME [FILE to show]
-    echo "FAIL: $1"
-    [ $# -gt 1 ] && [ -f "$2" ] && sed 's/^/    /' "$2"
-    fails=$((fails + 1))
-}
-check() { # check NAME EXPECTED_RC ACTUAL_RC
-    if [ "$2" -eq "$3" ]; then ok; else bad "$1: exit $3, expected $2" "$T/err"; fi
-}
-check_grep() { # check_grep NAME PATTERN FILE
-    if grep -q -- "$2" "$3"; then ok; else bad "$1: '$2' not in:" "$3"; fi
-}
 check_true() { # check_true NAME COMMAND...
     n=$1
     shift
