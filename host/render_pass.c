@@ -357,19 +357,18 @@ int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen)
            launch(r, kn, (size_t)n, k, err, errlen);
 }
 
-/* The per-pixel kernel over rows [row0, row0 + nrows): CW_PIX_LANES work-items per row. */
+/* The per-pixel kernel over rows [row0, row0 + nrows): CW_PIX_GROUPS work-groups per compute
+ * unit, which take the launch's runs of pixels one at a time (cw_pixel). */
 static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, char *err, size_t errlen)
 {
     const char *k = "cw_pixel";
     cl_kernel kn = r->k_pixel;
-    size_t global[2], local[2];
+    size_t global, local = group_size(r, r->k_pixel);
+    int units = renderer_compute_units(r);
     cl_int e, crow0 = row0, cnrows = nrows;
-    local[1] = 1;
-    local[0] = group_size(r, kn);
-    if (local[0] > CW_PIX_LANES)
-        local[0] = CW_PIX_LANES;
-    global[0] = CW_PIX_LANES; /* a power of two, like local[0] (group_size) */
-    global[1] = (size_t)nrows;
+    if (local > CW_PIX_LANES)
+        local = CW_PIX_LANES;
+    global = local * CW_PIX_GROUPS * (size_t)(units > 0 ? units : 1);
     if (set_world_args(r, kn, k, err, errlen) ||
         set_mem(kn, PIXEL_LIGHTS, &r->lights, k, r, err, errlen) ||
         set_mem(kn, PIXEL_MATERIALS, &r->materials, k, r, err, errlen) ||
@@ -380,12 +379,11 @@ static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, char 
         set_arg(kn, PIXEL_SX, sizeof sx, &sx, k, r, err, errlen) ||
         set_arg(kn, PIXEL_SY, sizeof sy, &sy, k, r, err, errlen))
         return -1;
-    e = clEnqueueNDRangeKernel(r->queue, kn, 2, NULL, global, local, 0, NULL, NULL);
+    e = clEnqueueNDRangeKernel(r->queue, kn, 1, NULL, &global, &local, 0, NULL, NULL);
     if (e != CL_SUCCESS) {
         char call[128];
-        snprintf(call, sizeof call,
-                 "clEnqueueNDRangeKernel(%s, %zux%zu work-items in groups of %zu)", k, global[0],
-                 global[1], local[0]);
+        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s, %zu work-items in groups of %zu)",
+                 k, global, local);
         return rpass_fail(e, call, r, err, errlen);
     }
     return 0;

@@ -92,9 +92,13 @@ typedef struct {
  * fewer). */
 #define CW_GROUP_SIZE 64
 
-/* Work-items per image row of the per-pixel kernel (cw_pixel), each tracing a run of
- * consecutive pixels of the row. */
+/* The per-pixel kernel (cw_pixel) hands out the pixels of a launch in runs of CW_PIX_RUN
+ * consecutive pixels of a row, one run at a time to whichever work-item asks next (an
+ * atomic counter, CW_COUNT_NEXT), to CW_PIX_GROUPS work-groups of up to CW_PIX_LANES
+ * work-items per compute unit. */
+#define CW_PIX_RUN 32
 #define CW_PIX_LANES 16
+#define CW_PIX_GROUPS 4
 
 /* Entries of the kernels' BVH traversal stack (the host checks its tree needs no more). */
 #define CW_BVH_STACK 128
@@ -203,6 +207,7 @@ typedef struct {
 #define CW_COUNT_SECONDARY_HITS 3
 #define CW_COUNT_BLOCKED 4
 #define CW_COUNT_DEPTH 5 /* per-pixel kernel: the deepest ray traced (the wavefront's levels) */
+#define CW_COUNT_NEXT 6  /* per-pixel kernel: the next run of pixels to hand out */
 #define CW_NUM_COUNTERS 8
 
 typedef struct {
