@@ -1,11 +1,11 @@
 /* What differs between OpenCL C 1.2 and host C99, and nothing else: the address-space
  * and inline keywords (CW_GLOBAL, CW_INLINE, CW_FORCE_INLINE), the vector types
- * (cw_float4, cw_int4, vec3, cw_lanes), the math functions (cw_sqrt ...), the bit scan cw_ctz, the
- * atomics and the contraction pragma. The kernel headers are written with these so that they
- * compile both as OpenCL C (the kernels) and as host C99 (host code and tests). OpenCL C appears
- * elsewhere only in the OpenCL branch of vecmath.h (vector operators and built-ins) and
- * in the entry kernels of clwhitted.cl (__kernel, __global, __local, work-item functions
- * and barriers), which the host never compiles. */
+ * (cw_float4, cw_int4, vec3, cw_lanes), the math functions (cw_sqrt ...) and bit casts (cw_as_int),
+ * the bit scan cw_ctz, the atomics and the contraction pragma. The kernel headers are written with
+ * these so that they compile both as OpenCL C (the kernels) and as host C99 (host code and tests).
+ * OpenCL C appears elsewhere only in the OpenCL branch of vecmath.h (vector operators and
+ * built-ins) and in the entry kernels of clwhitted.cl (__kernel, __global, __local, work-item
+ * functions and barriers), which the host never compiles. */
 #ifndef CW_COMPAT_H
 #define CW_COMPAT_H
 
@@ -42,10 +42,10 @@ typedef int4 cw_lanes_int;
 #define cw_fabs(x) fabs(x)
 #define cw_fmax(a, b) fmax((a), (b))
 #define cw_fmin(a, b) fmin((a), (b))
-#define cw_exp2(a) exp2(a)
-#define cw_log2(a) log2(a)
 #define cw_atomic_add_int(p, v) atomic_add((p), (v))
-#define cw_nextafter(a, b) nextafter((a), (b))
+#define cw_floor(a) floor(a)
+#define cw_as_int(a) as_int(a)
+#define cw_as_float(a) as_float(a)
 #define cw_copysign(a, b) copysign((a), (b))
 #define CW_INFINITY INFINITY
 /* the index of the lowest set bit of x (x != 0); OpenCL 1.2 has clz but not ctz */
@@ -102,15 +102,32 @@ typedef struct {
 #define cw_fabs(x) fabsf(x)
 #define cw_fmax(a, b) fmaxf((a), (b))
 #define cw_fmin(a, b) fminf((a), (b))
-#define cw_exp2(a) exp2f(a)
-#define cw_log2(a) log2f(a)
 CW_INLINE int cw_atomic_add_int(int *p, int v)
 {
     int old = *p;
     *p += v;
     return old;
 }
-#define cw_nextafter(a, b) nextafterf((a), (b))
+#define cw_floor(a) floorf(a)
+/* the bits of a float as an int, and back (OpenCL's as_int, as_float) */
+CW_INLINE int cw_as_int(float f)
+{
+    union {
+        float f;
+        int i;
+    } u;
+    u.f = f;
+    return u.i;
+}
+CW_INLINE float cw_as_float(int i)
+{
+    union {
+        float f;
+        int i;
+    } u;
+    u.i = i;
+    return u.f;
+}
 #define cw_copysign(a, b) copysignf((a), (b))
 #define CW_INFINITY INFINITY
 #define cw_ctz(x) __builtin_ctz(x)

@@ -17,17 +17,14 @@
 #define CW_FAR 1e30f /* tmax of camera and secondary rays */
 
 /* A ray with what the tests need precomputed once: the negated inverse direction for the
- * box test, and the axis permutation and shear of the watertight triangle test. */
+ * box test, and the axis permutation, permuted origin and shear of the watertight triangle
+ * test. */
 typedef struct {
-    vec3 o, d, ninv; /* ninv = -1 / d, never infinite */
-    int kx, ky, kz;
+    vec3 o, d, ninv;  /* ninv = -1 / d, never infinite */
+    int kx, ky, kz;   /* the axes that become x, y and z (z: the largest |d| component) */
+    float ox, oy, oz; /* the origin's components on those axes */
     float sx, sy, sz;
 } cw_rayinfo;
-
-CW_INLINE float isect_axis(vec3 v, int k)
-{
-    return k == 0 ? v.x : (k == 1 ? v.y : v.z);
-}
 
 CW_INLINE float isect_safe_inv(float x)
 {
@@ -35,25 +32,34 @@ CW_INLINE float isect_safe_inv(float x)
     return 1.0f / (cw_fabs(x) > 1e-30f ? x : cw_copysign(1e-30f, x));
 }
 
+/* The axes are picked by selects and the components read from small arrays, without a
+ * branch: a ray's direction is as good as random to a branch predictor. */
 CW_INLINE cw_rayinfo isect_rayinfo(vec3 o, vec3 d)
 {
     cw_rayinfo ri;
     float ax = cw_fabs(d.x), ay = cw_fabs(d.y), az = cw_fabs(d.z), dz;
-    int tmp;
+    float dv[3], ov[3];
+    int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1, flip;
+    dv[0] = d.x;
+    dv[1] = d.y;
+    dv[2] = d.z;
+    ov[0] = o.x;
+    ov[1] = o.y;
+    ov[2] = o.z;
+    dz = dv[kz];
+    flip = dz < 0.0f; /* keep the winding: swap x and y */
+    ri.kx = flip ? ky : kx;
+    ri.ky = flip ? kx : ky;
+    ri.kz = kz;
     ri.o = o;
     ri.d = d;
     ri.ninv = v3(-isect_safe_inv(d.x), -isect_safe_inv(d.y), -isect_safe_inv(d.z));
-    ri.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
-    ri.kx = ri.kz == 2 ? 0 : ri.kz + 1;
-    ri.ky = ri.kx == 2 ? 0 : ri.kx + 1;
-    dz = isect_axis(d, ri.kz);
-    if (dz < 0.0f) { /* keep the winding */
-        tmp = ri.kx;
-        ri.kx = ri.ky;
-        ri.ky = tmp;
-    }
-    ri.sx = isect_axis(d, ri.kx) / dz;
-    ri.sy = isect_axis(d, ri.ky) / dz;
+    ri.ox = ov[ri.kx];
+    ri.oy = ov[ri.ky];
+    ri.oz = ov[kz];
+    ri.sx = dv[ri.kx] / dz;
+    ri.sy = dv[ri.ky] / dz;
     ri.sz = 1.0f / dz;
     return ri;
 }

@@ -101,16 +101,17 @@ CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float
 CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo *ri, float tmin,
                              float tmax, float *t_out, float *u_out, float *v_out)
 {
-    vec3 a = v3_sub(v3_from4(tri->p0), ri->o);
-    vec3 b = v3_sub(v3_from4(tri->p1), ri->o);
-    vec3 c = v3_sub(v3_from4(tri->p2), ri->o);
-    float az = isect_axis(a, ri->kz), bz = isect_axis(b, ri->kz), cz = isect_axis(c, ri->kz);
-    float ax = isect_axis(a, ri->kx) - ri->sx * az;
-    float ay = isect_axis(a, ri->ky) - ri->sy * az;
-    float bx = isect_axis(b, ri->kx) - ri->sx * bz;
-    float by = isect_axis(b, ri->ky) - ri->sy * bz;
-    float cx = isect_axis(c, ri->kx) - ri->sx * cz;
-    float cy = isect_axis(c, ri->ky) - ri->sy * cz;
+    CW_GLOBAL const float *p0 = (CW_GLOBAL const float *)&tri->p0;
+    CW_GLOBAL const float *p1 = (CW_GLOBAL const float *)&tri->p1;
+    CW_GLOBAL const float *p2 = (CW_GLOBAL const float *)&tri->p2;
+    int kx = ri->kx, ky = ri->ky, kz = ri->kz;
+    float az = p0[kz] - ri->oz, bz = p1[kz] - ri->oz, cz = p2[kz] - ri->oz;
+    float ax = (p0[kx] - ri->ox) - ri->sx * az;
+    float ay = (p0[ky] - ri->oy) - ri->sy * az;
+    float bx = (p1[kx] - ri->ox) - ri->sx * bz;
+    float by = (p1[ky] - ri->oy) - ri->sy * bz;
+    float cx = (p2[kx] - ri->ox) - ri->sx * cz;
+    float cy = (p2[ky] - ri->oy) - ri->sy * cz;
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
@@ -142,8 +143,7 @@ CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float
                          int skip, float *t_out, float *u_out, float *v_out)
 {
     int kx = ri->kx, ky = ri->ky, kz = ri->kz;
-    cw_float4 ox = v4_splat(isect_axis(ri->o, kx)), oy = v4_splat(isect_axis(ri->o, ky));
-    cw_float4 oz = v4_splat(isect_axis(ri->o, kz));
+    cw_float4 ox = v4_splat(ri->ox), oy = v4_splat(ri->oy), oz = v4_splat(ri->oz);
     cw_float4 sx = v4_splat(ri->sx), sy = v4_splat(ri->sy), sz = v4_splat(ri->sz);
     cw_float4 az = v4_sub(b->v[kz], oz), bz = v4_sub(b->v[3 + kz], oz);
     cw_float4 cz = v4_sub(b->v[6 + kz], oz);

@@ -17,7 +17,8 @@
  *  4. grazing rays at a sphere's silhouette, and exact tangents;
  *  5. degenerate (collinear, coincident), needle and tiny triangles, rays parallel to a
  *     face;
- *  6. images invariant under scaling and translation of the whole scene.
+ *  6. images invariant under scaling and translation of the whole scene;
+ *  7. the shading's own power and ulp steps (shade_pow, shade_nudge) against libm.
  *
  * Tolerances. u = 2^-24 is float's unit roundoff. A float computation that works with
  * coordinates of magnitude M cannot place a surface better than a few u M, so:
@@ -1964,6 +1965,56 @@ static void test_image_invariance(void **state)
     assert_int_equal(fails, 0);
 }
 
+/* 7. shade_pow (the Blinn-Phong power, kernels/shade.h, here compiled as host C99) against
+ * double precision: x from 1e-30 to 1, exponents of real materials (0.1 .. 10000). The
+ * exponent y = p log2 x is a float, so its rounding alone costs a relative error of about
+ * 2^-24 ln 2 |y| in 2^y: the bound is 3e-7 (1 + |y|) wherever x^p >= 1e-30 (measured:
+ * 1.44e-7 (1 + |y|); the float library's exp2f(p log2f(x)): 7.2e-8 (1 + |y|)). x = 1 and
+ * p = 0 give exactly 1, x = 0 gives 0. */
+static void test_shade_pow(void **state)
+{
+    static const float ps[] = {0.1f,  0.5f,  1.0f,   2.0f,    4.81884f,
+                               10.0f, 33.0f, 100.0f, 1000.0f, 10000.0f};
+    double worst = 0.0;
+    int k, n = 0;
+    (void)state;
+    for (k = 0; k < (int)(sizeof ps / sizeof ps[0]); k++) {
+        float x;
+        assert_true(shade_pow(1.0f, ps[k]) == 1.0f);
+        assert_true(shade_pow(0.0f, ps[k]) == 0.0f);
+        for (x = 1e-30f; x <= 1.0f; x = x * 1.0007f + 1e-9f) {
+            double want = pow((double)x, (double)ps[k]), got = shade_pow(x, ps[k]);
+            double y = fabs((double)ps[k] * log2((double)x)), rel;
+            if (want < 1e-30)
+                continue;
+            n++;
+            rel = fabs(got - want) / want / (1.0 + y);
+            if (rel > worst)
+                worst = rel;
+            if (rel > 3e-7)
+                fail_msg("shade_pow(%.9g, %g) = %.9g, want %.9g (relative error %.3g (1 + |y|))", x,
+                         ps[k], got, want, rel);
+        }
+    }
+    assert_true(shade_pow(0.3f, 0.0f) == 1.0f);
+    printf("    shade_pow: %d values, worst relative error %.3g (1 + |p log2 x|)\n", n, worst);
+}
+
+/* shade_nudge is nextafterf toward the side of dir, on positive, negative and zero floats. */
+static void test_shade_nudge(void **state)
+{
+    static const float xs[] = {0.0f,    -0.0f,  1.0f,   -1.0f,     1e-38f,
+                               -1e-38f, 1e-45f, 3.5e4f, -7.25e-3f, FLT_MAX / 2};
+    int k;
+    (void)state;
+    for (k = 0; k < (int)(sizeof xs / sizeof xs[0]); k++) {
+        float up = shade_nudge(xs[k], 0.5f), down = shade_nudge(xs[k], -2.0f);
+        assert_true(memcmp(&up, &(float){nextafterf(xs[k], INFINITY)}, sizeof up) == 0);
+        assert_true(memcmp(&down, &(float){nextafterf(xs[k], -INFINITY)}, sizeof down) == 0);
+        assert_true(memcmp(&(float){shade_nudge(xs[k], 0.0f)}, &xs[k], sizeof up) == 0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1972,6 +2023,7 @@ int main(void)
         cmocka_unit_test(test_grazing),          cmocka_unit_test(test_degenerate_zero_area),
         cmocka_unit_test(test_needle_triangles), cmocka_unit_test(test_tiny_triangles),
         cmocka_unit_test(test_parallel_rays),    cmocka_unit_test(test_image_invariance),
+        cmocka_unit_test(test_shade_pow),        cmocka_unit_test(test_shade_nudge),
     };
     /* CW_TEST_FILTER=test_grazing (a cmocka pattern, * allowed): run only those tests */
     if (getenv("CW_TEST_FILTER"))
