@@ -205,7 +205,7 @@ static int render_batch(cli_options *o, const char *path, batch *b, progress_bar
     }
     r = b->r;
     if (renderer_check_memory(r, s->width, s->height, err, sizeof err) != 0 ||
-        renderer_set_scene(r, s, err, sizeof err) != 0) {
+        renderer_set_scene_dropping(r, &b->s, err, sizeof err) != 0) {
         fail_msg(bar, err);
         return 1;
     }

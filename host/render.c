@@ -308,11 +308,13 @@ static void fill_view(cw_frame *f, const scene *s, vec3d origin)
     f->max_depth = s->max_depth;
 }
 
-int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
+/* renderer_set_scene; with drop (== s), the scene's primitive arrays are emptied once
+ * converted. */
+static int set_scene(renderer *r, const scene *s, scene *drop, char *err, size_t errlen)
 {
     devscene ds;
     cw_frame *f = &r->host_frame;
-    int rc = -1;
+    int rc = -1, converted;
     double t0;
 
     release_scene(r);
@@ -320,7 +322,10 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
     r->stats.build_s = r->stats.compile_s = r->stats.upload_s = 0;
     /* the local origin: the camera's eye (docs/model.md, "Far from the origin") */
     r->origin = r->world_origin ? vec3d_make(0, 0, 0) : s->camera.eye;
-    if (devscene_convert(s, &r->origin, &ds, err, errlen) != 0)
+    converted = devscene_convert(s, &r->origin, &ds, err, errlen) == 0;
+    if (drop)
+        scene_drop_primitives(drop);
+    if (!converted)
         goto out_free;
     r->features.spheres = ds.nsph;
     r->features.triangles = ds.ntri;
@@ -366,6 +371,16 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
 out_free:
     devscene_free(&ds);
     return rc;
+}
+
+int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
+{
+    return set_scene(r, s, NULL, err, errlen);
+}
+
+int renderer_set_scene_dropping(renderer *r, scene *s, char *err, size_t errlen)
+{
+    return set_scene(r, s, s, err, errlen);
 }
 
 /* ---- rendering and read back ------------------------------------------------------ */

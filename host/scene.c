@@ -47,6 +47,16 @@ void scene_free(scene *s)
     scene_init(s);
 }
 
+void scene_drop_primitives(scene *s)
+{
+    array_free(&s->spheres);
+    array_free(&s->triangles);
+    array_free(&s->tri_normals);
+    array_free(&s->polygons);
+    array_free(&s->poly_verts);
+    array_free(&s->cones);
+}
+
 long scene_push(scene_array *a, const void *elem, size_t elem_size)
 {
     if (a->count == a->cap) {

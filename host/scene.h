@@ -131,6 +131,10 @@ typedef struct {
 /* Sets defaults: no objects, black background, zero ambient, depth CW_DEFAULT_DEPTH. */
 void scene_init(scene *s);
 void scene_free(scene *s);
+/* Frees and empties the primitive arrays (spheres, triangles and their vertex normals,
+ * polygons and their vertices, cones); the camera, size, lights, materials, meshes and
+ * instances stay. For a caller done with the primitives (see renderer_set_scene_dropping). */
+void scene_drop_primitives(scene *s);
 
 /* Sets s->name to the base name of path without its extension ("scene" if empty).
  * Returns 0, or -1 when out of memory. */

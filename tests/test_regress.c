@@ -3,7 +3,8 @@
  * any channel (hit/miss flips on silhouettes between CPUs with different floating-point
  * contraction), and the mean absolute difference must stay below 1e-4.
  * On failure the rendered image and a diff image go to build/test-output/.
- * CW_UPDATE_REFS=1 rewrites the references instead (review them before committing). */
+ * CW_UPDATE_REFS=1 rewrites the references instead (review them before committing).
+ * Also: the batch CLI's renderer_set_scene_dropping renders the same image bit for bit. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -95,12 +96,57 @@ static void test_projections(void **state)
     regress("scenes/oblique.json", "oblique-96x72", 96, 72, 0);
 }
 
+/* renderer_set_scene_dropping (what the batch CLI uses) renders what renderer_set_scene
+ * renders, bit for bit, and leaves the scene without its primitives but with its lights
+ * and materials. The scene has spheres, polygons, a triangle and a cone. */
+static void load_at(const char *path, int w, int h, scene *s)
+{
+    scene_init(s);
+    if (scene_load(path, s, err, sizeof err) != 0 || scene_finish(s, w, h, 0, err, sizeof err))
+        fail_msg("%s: %s", path, err);
+}
+
+static void test_dropping(void **state)
+{
+    const char *path = "tests/scenes/regress/pixel-lanes.nff";
+    scene kept, dropped;
+    image a, b;
+    size_t lights, materials;
+    (void)state;
+    load_at(path, 96, 72, &kept);
+    load_at(path, 96, 72, &dropped);
+    lights = dropped.lights.count;
+    materials = dropped.materials.count;
+    assert_true(dropped.spheres.count > 0 && dropped.cones.count > 0 &&
+                dropped.polygons.count + dropped.triangles.count > 0);
+    if (renderer_set_scene(R, &kept, err, sizeof err) != 0 ||
+        renderer_render(R, &a, err, sizeof err) != 0 ||
+        renderer_set_scene_dropping(R, &dropped, err, sizeof err) != 0 ||
+        renderer_render(R, &b, err, sizeof err) != 0)
+        fail_msg("%s: %s", path, err);
+    assert_true(dropped.spheres.count == 0 && dropped.spheres.data == NULL);
+    assert_true(dropped.triangles.count == 0 && dropped.triangles.data == NULL);
+    assert_true(dropped.tri_normals.count == 0 && dropped.polygons.count == 0);
+    assert_true(dropped.poly_verts.count == 0 && dropped.cones.count == 0);
+    assert_true(dropped.lights.count == lights && dropped.materials.count == materials);
+    assert_int_equal(a.width, b.width);
+    assert_int_equal(a.height, b.height);
+    assert_memory_equal(a.rgb, b.rgb, (size_t)a.width * a.height * 3 * sizeof *a.rgb);
+    printf("  dropping: %dx%d identical, the scene's primitive arrays emptied\n", a.width,
+           a.height);
+    image_free(&a);
+    image_free(&b);
+    scene_free(&kept);
+    scene_free(&dropped);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_default_scene),
         cmocka_unit_test(test_tetra),
         cmocka_unit_test(test_projections),
+        cmocka_unit_test(test_dropping),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
