@@ -28,25 +28,6 @@ static void array_free(scene_array *a)
     a->count = a->cap = 0;
 }
 
-void scene_free(scene *s)
-{
-    free(s->name);
-    array_free(&s->materials);
-    array_free(&s->lights);
-    array_free(&s->spheres);
-    array_free(&s->triangles);
-    array_free(&s->tri_normals);
-    array_free(&s->polygons);
-    array_free(&s->poly_verts);
-    array_free(&s->cones);
-    for (size_t i = 0; i < s->meshes.count; i++)
-        free(SCENE_AT(s->meshes, scene_mesh, i).source);
-    array_free(&s->meshes);
-    array_free(&s->mesh_tris);
-    array_free(&s->instances);
-    scene_init(s);
-}
-
 void scene_drop_primitives(scene *s)
 {
     array_free(&s->spheres);
@@ -55,6 +36,20 @@ void scene_drop_primitives(scene *s)
     array_free(&s->polygons);
     array_free(&s->poly_verts);
     array_free(&s->cones);
+}
+
+void scene_free(scene *s)
+{
+    free(s->name);
+    array_free(&s->materials);
+    array_free(&s->lights);
+    scene_drop_primitives(s);
+    for (size_t i = 0; i < s->meshes.count; i++)
+        free(SCENE_AT(s->meshes, scene_mesh, i).source);
+    array_free(&s->meshes);
+    array_free(&s->mesh_tris);
+    array_free(&s->instances);
+    scene_init(s);
 }
 
 long scene_push(scene_array *a, const void *elem, size_t elem_size)
