@@ -51,6 +51,7 @@ int renderer_create(renderer **out, const char *spec, char *err, size_t errlen)
 {
     renderer *r = calloc(1, sizeof *r);
     cl_device_type type = 0;
+    cl_uint units = 0;
     cl_int e;
     if (!r) {
         snprintf(err, errlen, "out of memory");
@@ -76,6 +77,9 @@ int renderer_create(renderer **out, const char *spec, char *err, size_t errlen)
         goto out_free;
     }
     r->cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
+    if (clGetDeviceInfo(r->device, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units, NULL) ==
+        CL_SUCCESS)
+        r->units = (int)units;
     r->ctx = clCreateContext(NULL, 1, &r->device, NULL, NULL, &e);
     if (e != CL_SUCCESS) {
         rpass_fail(e, "clCreateContext", r, err, errlen);
@@ -642,11 +646,7 @@ int render_strategy_parse(const char *name)
 
 int renderer_compute_units(const renderer *r)
 {
-    cl_uint units = 0;
-    if (clGetDeviceInfo(r->device, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units, NULL) !=
-        CL_SUCCESS)
-        return 0;
-    return (int)units;
+    return r->units;
 }
 
 void renderer_get_stats(const renderer *r, render_stats *st)

@@ -28,6 +28,7 @@ struct renderer {
     cl_command_queue queue;
     cl_ulong max_alloc; /* CL_DEVICE_MAX_MEM_ALLOC_SIZE */
     int cpu;            /* CL_DEVICE_TYPE_CPU: RENDER_AUTO picks the per-pixel kernel */
+    int units;          /* CL_DEVICE_MAX_COMPUTE_UNITS, 0 if unknown */
     cl_program program;
     char options[1024]; /* build options of `program` */
     int strategy;       /* of `program`: RENDER_WAVEFRONT (the four wavefront kernels) or

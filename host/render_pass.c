@@ -363,7 +363,7 @@ static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, char 
 {
     const char *k = "cw_pixel";
     cl_kernel kn = r->k_pixel;
-    size_t global, local = group_size(r, r->k_pixel);
+    size_t global, local = group_size(r, kn);
     int units = renderer_compute_units(r);
     cl_int e, crow0 = row0, cnrows = nrows;
     if (local > CW_PIX_LANES)

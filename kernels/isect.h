@@ -38,15 +38,9 @@ CW_INLINE cw_rayinfo isect_rayinfo(vec3 o, vec3 d)
 {
     cw_rayinfo ri;
     float ax = cw_fabs(d.x), ay = cw_fabs(d.y), az = cw_fabs(d.z), dz;
-    float dv[3], ov[3];
+    float dv[3] = {d.x, d.y, d.z}, ov[3] = {o.x, o.y, o.z};
     int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
     int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1, flip;
-    dv[0] = d.x;
-    dv[1] = d.y;
-    dv[2] = d.z;
-    ov[0] = o.x;
-    ov[1] = o.y;
-    ov[2] = o.z;
     dz = dv[kz];
     flip = dz < 0.0f; /* keep the winding: swap x and y */
     ri.kx = flip ? ky : kx;
