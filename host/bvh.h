@@ -68,8 +68,9 @@ void bvh_free(bvh *b);
  * non-finite area weights every node by 1. 0 for an empty tree. */
 double bvh_sah_cost(const bvh *b);
 
-/* The wide tree the kernels traverse: each node of a binary tree is merged with its
- * children (the child of largest area opened first) until it has CW_BVH_WIDTH. Depth-first,
+/* The wide tree the kernels traverse: each node of a binary tree is merged with the nodes
+ * below it into up to CW_BVH_WIDTH lanes, chosen for the least sum of the wide nodes'
+ * areas (the wide tree's SAH cost; a dynamic programme over the binary tree). Depth-first,
  * the root first. stack_need: the most entries a traversal stack holds (each node leaves
  * all but one of its interior children on it while it goes down that one). */
 typedef struct {

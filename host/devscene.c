@@ -428,6 +428,8 @@ static void pack_triangles(devscene *ds, int first, int c, size_t b)
             set_lane(&blk->v[3 * v + 2], lane, p[v]->z);
         }
         blk->index[lane] = idx;
+        blk->material[lane] = ds->tri[idx].material;
+        blk->normals[lane] = ds->tri[idx].normals;
     }
     for (int k = c; k % 4 != 0; k++)
         ds->tri_blocks[b + (size_t)k / 4].index[k % 4] = -1;

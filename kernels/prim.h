@@ -58,6 +58,7 @@ CW_FORCE_INLINE void prim_intersect(const cw_world *w, int ref, const cw_rayinfo
         hit->kind = kind;
         hit->index = index;
         hit->inst = 0; /* the world's, until an instance's walk marks it (traverse.h) */
+        hit->block = 0;
     }
 }
 
@@ -79,6 +80,8 @@ CW_FORCE_INLINE void prim_tri4(const cw_world *w, int block, const cw_rayinfo *r
         hit->kind = CW_PRIM_TRIANGLE;
         hit->index = b->index[lane];
         hit->inst = 0;
+        hit->block = block + 1;
+        hit->lane = lane;
     }
 }
 #endif
@@ -100,6 +103,7 @@ CW_FORCE_INLINE void prim_sph4(const cw_world *w, int block, const cw_rayinfo *r
         hit->kind = CW_PRIM_SPHERE;
         hit->index = b->index[lane];
         hit->inst = 0;
+        hit->block = 0;
     }
 }
 #endif

@@ -278,7 +278,7 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
     hit.v = 0.0f;
     hit.kind = CW_PRIM_NONE;
     hit.index = -1;
-    hit.inst = hit.pad1 = hit.pad2 = 0;
+    hit.inst = hit.block = hit.lane = 0;
     if (w->num_nodes == 0) {
         *out = hit;
         return;

@@ -191,14 +191,38 @@ CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float
 }
 #endif
 
+/* Vertex k (0, 1, 2) of lane i of block b. */
+CW_INLINE vec3 tri4_vertex(CW_GLOBAL const cw_tri4 *b, int k, int i)
+{
+    CW_GLOBAL const float *x = (CW_GLOBAL const float *)&b->v[3 * k];
+    return v3(x[i], x[4 + i], x[8 + i]);
+}
+
 /* The surface at a triangle hit: the point from the barycentric coordinates (u, v), the
- * shading normal interpolated from the vertex normals of a smooth triangle. */
+ * shading normal interpolated from the vertex normals of a smooth triangle. A hit in a
+ * block (hit.block) reads the block, which holds the same vertices, material and normals
+ * as the triangle. */
 CW_INLINE cw_surface surface_triangle(const cw_world *w, cw_hit hit, vec3 p)
 {
     cw_surface s;
-    CW_GLOBAL const cw_triangle *t = &w->triangles[hit.index];
-    vec3 p0 = v3_from4(t->p0), p1 = v3_from4(t->p1), p2 = v3_from4(t->p2);
+    vec3 p0, p1, p2;
     float b0 = 1.0f - hit.u - hit.v;
+    int material, normals;
+    if (hit.block > 0) {
+        CW_GLOBAL const cw_tri4 *b = &w->tri_blocks[hit.block - 1];
+        p0 = tri4_vertex(b, 0, hit.lane);
+        p1 = tri4_vertex(b, 1, hit.lane);
+        p2 = tri4_vertex(b, 2, hit.lane);
+        material = b->material[hit.lane];
+        normals = b->normals[hit.lane];
+    } else {
+        CW_GLOBAL const cw_triangle *t = &w->triangles[hit.index];
+        p0 = v3_from4(t->p0);
+        p1 = v3_from4(t->p1);
+        p2 = v3_from4(t->p2);
+        material = t->material;
+        normals = t->normals;
+    }
     s.ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
     s.flat = CW_REF(CW_PRIM_TRIANGLE, hit.index) + 1;
 #if !CW_FAST
@@ -208,16 +232,16 @@ CW_INLINE cw_surface surface_triangle(const cw_world *w, cw_hit hit, vec3 p)
         s.err = v3_scale(v3_add(v3_abs(q0), v3_add(v3_abs(q1), v3_abs(q2))), CW_GAMMA(7));
     }
 #endif
-    if (t->normals >= 0) {
-        vec3 sn = v3_add(v3_scale(v3_from4(w->normals[t->normals]), b0),
-                         v3_add(v3_scale(v3_from4(w->normals[t->normals + 1]), hit.u),
-                                v3_scale(v3_from4(w->normals[t->normals + 2]), hit.v)));
+    if (normals >= 0) {
+        vec3 sn = v3_add(v3_scale(v3_from4(w->normals[normals]), b0),
+                         v3_add(v3_scale(v3_from4(w->normals[normals + 1]), hit.u),
+                                v3_scale(v3_from4(w->normals[normals + 2]), hit.v)));
         float len = v3_len(sn);
         s.ns = len > 0.0f ? v3_scale(sn, 1.0f / len) : s.ng;
     } else {
         s.ns = s.ng;
     }
-    s.material = t->material;
+    s.material = material;
     s.p = p;
     return s;
 }

@@ -43,10 +43,14 @@ typedef struct {
 /* Up to four triangles of one BVH leaf side by side, for one 4-wide ray-triangle test
  * (triangle.h): v[3 * k + a] holds coordinate a (x, y, z) of vertex k (p0, p1, p2), lane i
  * that of triangle index[i] (an index into the triangle array); an unused lane has index
- * -1 and zero vertices. */
+ * -1 and zero vertices. Lane i's material and normals are triangle index[i]'s, so that the
+ * surface at a hit in a block (cw_hit.block) is made from the block the test has just
+ * read, not from a second, random read of the triangle array: three cache lines in all. */
 typedef struct {
     cw_float4 v[9];
     int index[4];
+    int material[4];
+    int normals[4];
 } cw_tri4;
 
 /* Up to four spheres of one BVH leaf side by side, for one 4-wide ray-sphere test
@@ -216,7 +220,8 @@ typedef struct {
     int kind;   /* CW_PRIM_*; CW_PRIM_NONE for a miss */
     int index;  /* index into the array of that kind */
     int inst;   /* 1 + the instance whose mesh the hit triangle is in; 0: the world's */
-    int pad1, pad2;
+    int block;  /* a triangle hit in a block (cw_tri4): 1 + the block; 0: none */
+    int lane;   /* and its lane there */
 } cw_hit;
 
 #endif
