@@ -343,8 +343,8 @@ static void plan_node(const cw_bvh_node *n2, int i, unsigned char *plan, double 
 }
 
 /* Appends the lanes the plan gives the subtree of binary node i as at most k lanes. */
-static void plan_lanes(const cw_bvh_node *n2, const unsigned char *plan, int i, int k,
-                       int *slots, int *ns)
+static void plan_lanes(const cw_bvh_node *n2, const unsigned char *plan, int i, int k, int *slots,
+                       int *ns)
 {
     int a = k >= 2 && n2[i].count <= 0 ? plan[(size_t)i * CW_BVH_WIDTH + k - 1] : 0;
     if (a == 0) {
