@@ -330,7 +330,9 @@ static void upload(scene *s)
 /* ---- the device arrays, rebuilt on the host --------------------------------------------- */
 
 /* The device arrays as the renderer builds them (host/devscene.c, the same indices:
- * test_selfhit checks it against the device's t), and the kernels' view of them. */
+ * test_selfhit checks it against the device's t), the BVH and its triangle blocks
+ * included (a device hit in a block names its block, which prim_surface reads), and the
+ * kernels' view of them. */
 typedef struct {
     devscene d;
     cw_world w;
@@ -341,7 +343,8 @@ static void host_world_init(host_world *hw, const scene *s)
     char msg[256];
     devscene_world a;
     memset(&hw->w, 0, sizeof hw->w);
-    if (devscene_convert(s, NULL, &hw->d, msg, sizeof msg) != 0)
+    if (devscene_convert(s, NULL, &hw->d, msg, sizeof msg) != 0 ||
+        devscene_build_bvh(&hw->d, msg, sizeof msg) != 0)
         fail_msg("%s", msg);
     devscene_world_arrays(&hw->d, &a);
 #define HOST_WORLD_BIND(type, name, what) hw->w.name = a.name;
