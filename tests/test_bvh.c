@@ -14,6 +14,7 @@
 #include "testutil.h"
 #include "sys.h"
 
+#include "box.h"
 #include "bvh.h"
 #include "config.h"
 #include "devscene.h"
@@ -1252,6 +1253,91 @@ static void test_collapse_wide(void **state)
     }
 }
 
+/* ---- the collapse's choice: the least sum of wide-node areas ------------------------------- */
+
+/* The least sum of wide-node areas over every way to collapse the subtree of binary node n
+ * when n is a wide node of its own, found by exhaustive search (not bvh.c's dynamic
+ * programme): its lanes are a frontier of its subtree (nodes whose subtrees hold each leaf
+ * once) of at most CW_BVH_WIDTH nodes, other than n alone, and each interior lane is a wide
+ * node in turn. */
+static double exhaustive_wide(const cw_bvh_node *n2, int n);
+
+/* The least cost of lanes covering the subtree of binary node n, at most k of them; -1
+ * when k lanes cannot cover it (k < 1). as_one: n may be one lane itself. */
+static double exhaustive_lanes(const cw_bvh_node *n2, int n, int k, int as_one)
+{
+    double best = -1.0;
+    if (k < 1)
+        return -1.0;
+    if (as_one)
+        best = n2[n].count > 0 ? 0.0 : exhaustive_wide(n2, n);
+    if (n2[n].count <= 0 && k >= 2)
+        for (int a = 1; a < k; a++) {
+            double l = exhaustive_lanes(n2, n + 1, a, 1);
+            double r = exhaustive_lanes(n2, n2[n].start, k - a, 1);
+            if (l >= 0.0 && r >= 0.0 && (best < 0.0 || l + r < best))
+                best = l + r;
+        }
+    return best;
+}
+
+static double exhaustive_wide(const cw_bvh_node *n2, int n)
+{
+    return box_area(n2[n].lo, n2[n].hi) + exhaustive_lanes(n2, n, CW_BVH_WIDTH, 0);
+}
+
+/* The sum of the areas of a wide tree's nodes (each the union of its lanes' boxes). */
+static double wide_area_sum(const bvhw *q)
+{
+    double sum = 0.0;
+    for (int k = 0; k < q->num_nodes; k++) {
+        float lo[3], hi[3];
+        box_empty(lo, hi);
+        for (int i = 0; i < CW_BVH_WIDTH; i++) {
+            float blo[3], bhi[3];
+            if (q->nodes[k].count[i] == -1)
+                continue; /* an empty lane */
+            for (int a = 0; a < 3; a++) {
+                blo[a] = q->nodes[k].bound[a].v[i];
+                bhi[a] = q->nodes[k].bound[3 + a].v[i];
+            }
+            box_grow(lo, hi, blo, bhi);
+        }
+        sum += box_area(lo, hi);
+    }
+    return sum;
+}
+
+/* The collapse against an exhaustive search of every collapse on small random trees
+ * (leaves of up to 2, so that up to 20 leaves give many ways): the same least area sum. */
+static void test_collapse_least_area(void **state)
+{
+    char err[256];
+    int trees = 0;
+    (void)state;
+    for (int n = 2; n <= 40; n += 2) {
+        for (uint64_t seed = 1; seed <= 5; seed++) {
+            bvh_box *boxes = random_boxes(n, 7000 + 100 * (uint64_t)n + seed, 10.0f, 2.0f);
+            bvh t;
+            bvhw q;
+            double want, got;
+            build_ok(&t, boxes, n, 2);
+            assert_int_equal(bvh_collapse_wide(&t, &q, err, sizeof err), 0);
+            want = t.nodes[0].count > 0 ? 0.0 : exhaustive_wide(t.nodes, 0);
+            got = t.nodes[0].count > 0 ? 0.0 : wide_area_sum(&q);
+            if (fabs(got - want) > 1e-9 * want)
+                fail_msg("%d primitives (seed %d): the wide tree's area sum is %.17g, the least "
+                         "of all collapses %.17g",
+                         n, (int)seed, got, want);
+            trees++;
+            bvhw_free(&q);
+            bvh_free(&t);
+            free(boxes);
+        }
+    }
+    printf("  %d small trees: the collapse's area sum is the exhaustive least\n", trees);
+}
+
 /* ---- blocks of four triangles ------------------------------------------------------------ */
 
 static void tri4_lane(cw_float4 *v, int lane, float x)
@@ -1575,6 +1661,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_collapse_wide),
+        cmocka_unit_test(test_collapse_least_area),
         cmocka_unit_test(test_tri4_matches_single),
         cmocka_unit_test(test_sph4_matches_single),
         cmocka_unit_test(test_triangle_blocks),
