@@ -310,13 +310,10 @@ static void plan_node(const cw_bvh_node *n2, int i, unsigned char *plan, double 
 {
     const cw_bvh_node *n = &n2[i];
     double l[CW_BVH_WIDTH], r[CW_BVH_WIDTH], g[CW_BVH_WIDTH + 1], own;
-    unsigned char ga[CW_BVH_WIDTH + 1];
-    unsigned char *pl = &plan[(size_t)i * CW_BVH_WIDTH];
-    if (n->count > 0) {
-        for (int k = 0; k < CW_BVH_WIDTH; k++) {
+    unsigned char ga[CW_BVH_WIDTH + 1], *pl;
+    if (n->count > 0) { /* a leaf costs nothing; its plan is never read */
+        for (int k = 0; k < CW_BVH_WIDTH; k++)
             f[k] = 0.0;
-            pl[k] = 0;
-        }
         return;
     }
     plan_node(n2, i + 1, plan, l);
@@ -333,6 +330,7 @@ static void plan_node(const cw_bvh_node *n2, int i, unsigned char *plan, double 
         }
     }
     own = box_area(n->lo, n->hi) + g[CW_BVH_WIDTH];
+    pl = &plan[(size_t)i * CW_BVH_WIDTH];
     f[0] = own;
     pl[0] = ga[CW_BVH_WIDTH];
     for (int k = 2; k <= CW_BVH_WIDTH; k++) {

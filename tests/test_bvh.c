@@ -1149,6 +1149,15 @@ static void test_root_split_reference(void **state)
     free(b);
 }
 
+/* The box of lane i of wide node nd. */
+static void lane_box(const cw_bvhw_node *nd, int i, float lo[3], float hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        lo[a] = nd->bound[a].v[i];
+        hi[a] = nd->bound[3 + a].v[i];
+    }
+}
+
 /* Walks the wide tree from node k: every lane's box must equal the binary node it came
  * from (checked through containment of what lies below), an empty lane's box must be
  * at +infinity (no ray enters it), every primitive must be reached once, and the stack a
@@ -1162,10 +1171,7 @@ static int walk_wide(const bvhw *q, const bvh *t, const bvh_box *boxes, int k, i
     for (i = 0; i < CW_BVH_WIDTH; i++) {
         int c = nd->count[i], j, a;
         float lo[3], hi[3];
-        for (a = 0; a < 3; a++) {
-            lo[a] = nd->bound[a].v[i];
-            hi[a] = nd->bound[3 + a].v[i];
-        }
+        lane_box(nd, i, lo, hi);
         if (c == -1) { /* empty: a box at +infinity */
             for (a = 0; a < 3; a++)
                 assert_true(lo[a] == INFINITY && hi[a] == INFINITY);
@@ -1297,10 +1303,7 @@ static double wide_area_sum(const bvhw *q)
             float blo[3], bhi[3];
             if (q->nodes[k].count[i] == -1)
                 continue; /* an empty lane */
-            for (int a = 0; a < 3; a++) {
-                blo[a] = q->nodes[k].bound[a].v[i];
-                bhi[a] = q->nodes[k].bound[3 + a].v[i];
-            }
+            lane_box(&q->nodes[k], i, blo, bhi);
             box_grow(lo, hi, blo, bhi);
         }
         sum += box_area(lo, hi);
