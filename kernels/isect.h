@@ -17,19 +17,21 @@
 #define CW_FAR 1e30f /* tmax of camera and secondary rays */
 
 /* A ray with what the tests need precomputed once: the negated inverse direction for the
- * box test, and the axis permutation, permuted origin and shear of the watertight triangle
- * test. */
+ * box test and, per axis, which of a box's two planes the ray meets first; the axis
+ * permutation, permuted origin and shear of the watertight triangle test. */
 typedef struct {
     vec3 o, d, ninv;  /* ninv = -1 / d, never infinite */
+    int near[3];      /* per axis: the index in a node's bound[] of the plane met first */
     int kx, ky, kz;   /* the axes that become x, y and z (z: the largest |d| component) */
     float ox, oy, oz; /* the origin's components on those axes */
     float sx, sy, sz;
 } cw_rayinfo;
 
-CW_INLINE float isect_safe_inv(float x)
+/* x, or +-1e-30 where |x| is smaller: 1 over it is never infinite, and the box test
+ * then needs no special case for 0 */
+CW_INLINE float isect_safe_den(float x)
 {
-    /* 1/x, but never infinite: the box test then needs no special case for 0 */
-    return 1.0f / (cw_fabs(x) > 1e-30f ? x : cw_copysign(1e-30f, x));
+    return cw_fabs(x) > 1e-30f ? x : cw_copysign(1e-30f, x);
 }
 
 /* The axes are picked by selects and the components read from small arrays, without a
@@ -48,13 +50,23 @@ CW_INLINE cw_rayinfo isect_rayinfo(vec3 o, vec3 d)
     ri.kz = kz;
     ri.o = o;
     ri.d = d;
-    ri.ninv = v3(-isect_safe_inv(d.x), -isect_safe_inv(d.y), -isect_safe_inv(d.z));
+    /* two vector divisions for the six quotients, each rounded as a scalar one is */
+    ri.ninv = v3_div(v3(-1.0f, -1.0f, -1.0f),
+                     v3(isect_safe_den(d.x), isect_safe_den(d.y), isect_safe_den(d.z)));
+    /* ninv < 0 (a direction of +0 or more): the lower plane first. (o - lower) * ninv <=
+     * (o - upper) * ninv then holds to the bit, rounding being monotonic */
+    ri.near[0] = ri.ninv.x < 0.0f ? 0 : 3;
+    ri.near[1] = ri.ninv.y < 0.0f ? 1 : 4;
+    ri.near[2] = ri.ninv.z < 0.0f ? 2 : 5;
     ri.ox = ov[ri.kx];
     ri.oy = ov[ri.ky];
     ri.oz = ov[kz];
-    ri.sx = dv[ri.kx] / dz;
-    ri.sy = dv[ri.ky] / dz;
-    ri.sz = 1.0f / dz;
+    {
+        vec3 sh = v3_div(v3(dv[ri.kx], dv[ri.ky], 1.0f), v3(dz, dz, dz));
+        ri.sx = sh.x;
+        ri.sy = sh.y;
+        ri.sz = sh.z;
+    }
     return ri;
 }
 

@@ -18,22 +18,23 @@
 /* The child boxes of a node against [tmin, tmax] at once: the lanes a ray enters, as a bit
  * mask, and each lane's entry distance in enter[]. Each plane's distance is (o - b) * (-1/d)
  * (ri->ninv), which is (b - o) / d to the bit and lets the compiler read the node's planes
- * straight into the subtraction; per axis the nearer of the two planes is the entry, the
- * farther the exit. An empty lane's box lies at +infinity: every distance is +-infinity
- * there, and no interval [entry, exit] is left. The robust path widens the exit by
- * 1 + 2 gamma(3) (Ize 2013). */
+ * straight into the subtraction; per axis the ray's near plane (ri->near) gives the entry,
+ * the other the exit, which is what the lesser and greater of the two distances would be to
+ * the bit. An empty lane's box lies at +infinity: every distance is +-infinity there, and
+ * no interval [entry, exit] is left. The robust path widens the exit by 1 + 2 gamma(3)
+ * (Ize 2013). */
 CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo *ri, float tmin,
                              float tmax, float *enter)
 {
+    CW_GLOBAL const cw_lanes *b = nd->bound;
+    int nx = ri->near[0], ny = ri->near[1], nz = ri->near[2];
     cw_lanes ox = vl_splat(ri->o.x), oy = vl_splat(ri->o.y), oz = vl_splat(ri->o.z);
     cw_lanes ix = vl_splat(ri->ninv.x), iy = vl_splat(ri->ninv.y), iz = vl_splat(ri->ninv.z);
-    cw_lanes ax = vl_mul(vl_sub(ox, nd->bound[0]), ix), bx = vl_mul(vl_sub(ox, nd->bound[3]), ix);
-    cw_lanes ay = vl_mul(vl_sub(oy, nd->bound[1]), iy), by = vl_mul(vl_sub(oy, nd->bound[4]), iy);
-    cw_lanes az = vl_mul(vl_sub(oz, nd->bound[2]), iz), bz = vl_mul(vl_sub(oz, nd->bound[5]), iz);
-    cw_lanes te =
-        vl_max(vl_max(vl_min(ax, bx), vl_min(ay, by)), vl_max(vl_min(az, bz), vl_splat(tmin)));
-    cw_lanes tx =
-        vl_min(vl_min(vl_max(ax, bx), vl_max(ay, by)), vl_min(vl_max(az, bz), vl_splat(tmax)));
+    cw_lanes ex = vl_mul(vl_sub(ox, b[nx]), ix), fx = vl_mul(vl_sub(ox, b[3 - nx]), ix);
+    cw_lanes ey = vl_mul(vl_sub(oy, b[ny]), iy), fy = vl_mul(vl_sub(oy, b[5 - ny]), iy);
+    cw_lanes ez = vl_mul(vl_sub(oz, b[nz]), iz), fz = vl_mul(vl_sub(oz, b[7 - nz]), iz);
+    cw_lanes te = vl_max(vl_max(ex, ey), vl_max(ez, vl_splat(tmin)));
+    cw_lanes tx = vl_min(vl_min(fx, fy), vl_min(fz, vl_splat(tmax)));
 #if !CW_FAST
     tx = vl_mul(tx, vl_splat(1.0000004f));
 #endif

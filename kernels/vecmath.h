@@ -108,6 +108,11 @@ CW_INLINE vec3 v3_scale(vec3 a, float s)
 {
     return a * s;
 }
+/* a / b per component: one vector division */
+CW_INLINE vec3 v3_div(vec3 a, vec3 b)
+{
+    return a / b;
+}
 CW_INLINE float v3_dot(vec3 a, vec3 b)
 {
     return dot(a, b);
@@ -295,6 +300,10 @@ CW_INLINE vec3 v3_mul(vec3 a, vec3 b)
 CW_INLINE vec3 v3_scale(vec3 a, float s)
 {
     return v3(a.x * s, a.y * s, a.z * s);
+}
+CW_INLINE vec3 v3_div(vec3 a, vec3 b)
+{
+    return v3(a.x / b.x, a.y / b.y, a.z / b.z);
 }
 CW_INLINE float v3_dot(vec3 a, vec3 b)
 {

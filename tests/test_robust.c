@@ -1972,7 +1972,7 @@ static void test_image_invariance(void **state)
  * double precision: x from 1e-30 to 1, exponents of real materials (0.1 .. 10000). The
  * exponent y = p log2 x is a float, so its rounding alone costs a relative error of about
  * 2^-24 ln 2 |y| in 2^y: the bound is 3e-7 (1 + |y|) wherever x^p >= 1e-30 (measured:
- * 1.44e-7 (1 + |y|); the float library's exp2f(p log2f(x)): 7.2e-8 (1 + |y|)). x = 1 and
+ * 1.67e-7 (1 + |y|); the float library's exp2f(p log2f(x)): 7.2e-8 (1 + |y|)). x = 1 and
  * p = 0 give exactly 1, x = 0 gives 0. */
 static void test_shade_pow(void **state)
 {
