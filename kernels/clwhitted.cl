@@ -47,8 +47,7 @@ cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_mater
         x = (job - y * runs) * CW_PIX_RUN;
         x1 = min(f->nx, x + CW_PIX_RUN);
         for (; x < x1; x++)
-            pix_sum(&sum,
-                    pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy));
+            pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy, &sum);
     }
     for (k = 0; k < CW_COUNT_DEPTH; k++)
         if (pix_counted(k) && sum.n[k] != 0)
