@@ -402,44 +402,58 @@ int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size
     return rpass_trace_band(r, sample, row0, nrows, 0.0, 1.0, err, errlen);
 }
 
-/* Reads the accumulation image back as nx * ny rgb + count floats. */
-static float *read_accumulation(renderer *r, char *err, size_t errlen)
+/* The accumulation image, nx * ny rgb + count floats, mapped for reading: on a CPU device
+ * the buffer's own memory, read in place (a read into a new host array cost 45 ms at
+ * 2048x2048, its first touch and the copy). NULL on failure; unmap_accumulation after. */
+static float *map_accumulation(renderer *r, char *err, size_t errlen)
 {
     size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
+    cl_int e;
     float *px;
     if (rpass_ensure_image(r, err, errlen))
         return NULL;
-    px = malloc(n * 4 * sizeof *px);
-    if (!px) {
-        snprintf(err, errlen, "out of memory for a %zu-pixel image", n);
-        return NULL;
-    }
-    if (rpass_read(r, r->image, n * 4 * sizeof *px, px, "image", err, errlen)) {
-        free(px);
+    px = clEnqueueMapBuffer(r->queue, r->image, CL_TRUE, CL_MAP_READ, 0, n * 4 * sizeof *px, 0,
+                            NULL, NULL, &e);
+    if (e != CL_SUCCESS || !px) {
+        rpass_fail(e != CL_SUCCESS ? e : CL_INVALID_VALUE, "clEnqueueMapBuffer(image)", r, err,
+                   errlen);
         return NULL;
     }
     return px;
 }
 
+/* Gives back a map_accumulation (the queue's next commands run after the unmap). A failure
+ * is reported (non-zero) unless an error is already in err (rc non-zero). */
+static int unmap_accumulation(renderer *r, float *px, int rc, char *err, size_t errlen)
+{
+    cl_int e = clEnqueueUnmapMemObject(r->queue, r->image, px, 0, NULL, NULL);
+    if (e != CL_SUCCESS && rc == 0)
+        return rpass_fail(e, "clEnqueueUnmapMemObject(image)", r, err, errlen);
+    return e != CL_SUCCESS ? -1 : rc;
+}
+
 int renderer_read(renderer *r, image *img, char *err, size_t errlen)
 {
-    size_t n;
+    size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
     float *px;
+    int rc = 0;
 
     if (rpass_need_scene(r, err, errlen))
         return -1;
-    px = read_accumulation(r, err, errlen);
-    if (!px)
-        return -1;
-    n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
     if (image_alloc(img, r->host_frame.nx, r->host_frame.ny) != 0) {
         snprintf(err, errlen, "out of memory for a %zu-pixel image", n);
-        free(px);
+        return -1;
+    }
+    px = map_accumulation(r, err, errlen);
+    if (!px) {
+        image_free(img);
         return -1;
     }
     rrows_resolve_mean(px, img);
-    free(px);
-    return 0;
+    rc = unmap_accumulation(r, px, rc, err, errlen);
+    if (rc != 0)
+        image_free(img);
+    return rc;
 }
 
 static int write_frame(renderer *r, char *err, size_t errlen)
@@ -475,17 +489,20 @@ static int render_spd(renderer *r, image *img, char *err, size_t errlen)
     rrows_spd_frame(&saved, &r->host_frame);
     if (write_frame(r, err, errlen) || trace_all(r, 1, err, errlen))
         goto out_restore;
-    px = read_accumulation(r, err, errlen);
-    if (!px)
-        goto out_restore;
     if (image_alloc(img, saved.nx, saved.ny) != 0) {
         snprintf(err, errlen, "out of memory for a %dx%d image", saved.nx, saved.ny);
         goto out_restore;
     }
+    px = map_accumulation(r, err, errlen);
+    if (!px)
+        goto out_free_image;
     rrows_resolve_spd(px, img);
-    rc = 0;
+    rc = unmap_accumulation(r, px, 0, err, errlen);
+    if (rc == 0)
+        goto out_restore;
+out_free_image:
+    image_free(img);
 out_restore:
-    free(px);
     r->host_frame = saved;
     if (write_frame(r, err, errlen) != 0)
         rc = -1;
