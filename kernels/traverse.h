@@ -42,6 +42,11 @@ CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo 
     return vl_le_mask(te, tx);
 }
 
+/* Each walk below reads a node's interior lanes as one mask (vl_zero_mask of its counts)
+ * before its box test: the load of the node's last cache line, which holds the counts
+ * and children, then starts with the loads of its planes instead of after the test
+ * (1M and 4M random triangles: 4-5% faster). */
+
 /* Inserts child c, entered at distance e, into the n children ci/ct sorted nearest first. */
 CW_INLINE void bvh_insert(int *ci, float *ct, int n, int c, float e)
 {
@@ -186,11 +191,16 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
         CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[node];
         int ci[CW_BVH_WIDTH], n = 0;
         float ct[CW_BVH_WIDTH], enter[CW_BVH_WIDTH];
+        unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, ri, tmin, *t_best, enter);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);
             mask &= mask - 1u;
+            if (inner >> i & 1u) {
+                bvh_insert(ci, ct, n++, nd->child[i], enter[i]);
+                continue;
+            }
             count = nd->count[i];
             if (count > 0) {
                 for (k = nd->child[i]; k < nd->child[i] + count; k++) {
@@ -200,8 +210,6 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
                 }
             } else if (count < -1) {
                 bvh_closest_blocks(w, nd->child[i], -1 - count, ri, tmin, skip, t_best, hit);
-            } else if (count == 0) {
-                bvh_insert(ci, ct, n++, nd->child[i], enter[i]);
             }
         }
         node = bvh_next(stack, stack_t, &sp, ci, ct, n, *t_best);
@@ -221,16 +229,17 @@ CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, fl
     while (sp > 0) {
         CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[stack[--sp]];
         float enter[CW_BVH_WIDTH];
+        unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, ri, tmin, tmax, enter);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);
             mask &= mask - 1u;
-            count = nd->count[i];
-            if (count == 0) {
+            if (inner >> i & 1u) {
                 stack[sp++] = nd->child[i];
                 continue;
             }
+            count = nd->count[i];
             if (count < -1 && bvh_any_blocks(w, nd->child[i], -1 - count, ri, tmin, tmax, skip))
                 return 1;
             for (k = nd->child[i]; k < nd->child[i] + count; k++) {
@@ -288,14 +297,17 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
         CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[node];
         int ci[CW_BVH_WIDTH], n = 0;
         float ct[CW_BVH_WIDTH], enter[CW_BVH_WIDTH];
+        unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, &ri, tmin, t_best, enter);
         while (mask != 0u) {
             int count;
-            float e;
             i = cw_ctz(mask);
             mask &= mask - 1u;
+            if (inner >> i & 1u) {
+                bvh_insert(ci, ct, n++, nd->child[i], enter[i]);
+                continue;
+            }
             count = nd->count[i];
-            e = enter[i];
             if (count > 0) {
                 for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                     int ref = w->refs[k];
@@ -314,8 +326,6 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
             } else if (count < -1) { /* blocks of four spheres or triangles */
                 bvh_closest_leaf_blocks(w, nd->child[i], count, &ri, tmin, wskip, &t_best, &hit);
 #endif
-            } else if (count == 0) {
-                bvh_insert(ci, ct, n++, nd->child[i], e);
             }
         }
         /* stack the farther ones (farthest deepest), go down the nearest */
@@ -343,19 +353,20 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
     while (sp > 0) {
         CW_GLOBAL const cw_bvhw_node *nd;
         float enter[CW_BVH_WIDTH];
-        unsigned mask;
+        unsigned mask, inner;
         node = stack[--sp];
         nd = &w->nodes[node];
+        inner = vl_zero_mask(nd->count);
         mask = bvh_boxes(nd, &ri, tmin, tmax, enter);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);
             mask &= mask - 1u;
-            count = nd->count[i];
-            if (count == 0) {
+            if (inner >> i & 1u) {
                 stack[sp++] = nd->child[i];
                 continue;
             }
+            count = nd->count[i];
 #if CW_HAS_SPHERES || CW_HAS_TRIANGLES
             if (count < -1 && bvh_any_leaf_blocks(w, nd->child[i], count, &ri, tmin, tmax, wskip))
                 return 1;

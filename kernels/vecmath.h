@@ -178,6 +178,22 @@ CW_INLINE void vl_store(cw_lanes a, float *p)
     vstore4(a, 0, p);
 #endif
 }
+/* The lanes where p[lane] == 0, as a bit mask: one vector load and compare */
+CW_INLINE unsigned vl_zero_mask(CW_GLOBAL const int *p)
+{
+#if CW_BVH_WIDTH == 8 && defined(__AVX__) && defined(__x86_64__)
+    return (unsigned)__builtin_ia32_movmskps256(as_float8(vload8(0, p) == (int8)(0)));
+#else
+#if CW_BVH_WIDTH == 8
+    int8 m = (vload8(0, p) == (int8)(0)) & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    int4 h = m.lo | m.hi;
+#else
+    int4 h = (vload4(0, p) == (int4)(0)) & (int4)(1, 2, 4, 8);
+#endif
+    int2 q = h.lo | h.hi;
+    return (unsigned)(q.x | q.y);
+#endif
+}
 #else /* host C99 */
 
 CW_INLINE vec3 v3(float x, float y, float z)
@@ -371,6 +387,15 @@ CW_INLINE void vl_store(cw_lanes a, float *p)
     int i;
     for (i = 0; i < CW_BVH_WIDTH; i++)
         p[i] = a.v[i];
+}
+CW_INLINE unsigned vl_zero_mask(const int *p)
+{
+    unsigned m = 0;
+    int i;
+    for (i = 0; i < CW_BVH_WIDTH; i++)
+        if (p[i] == 0)
+            m |= 1u << i;
+    return m;
 }
 #endif
 
