@@ -34,7 +34,8 @@ enum {
     PIXEL_ROW0,
     PIXEL_NROWS,
     PIXEL_SX,
-    PIXEL_SY
+    PIXEL_SY,
+    PIXEL_FIRST
 };
 
 int rpass_fail(cl_int e, const char *call, const renderer *r, char *err, size_t errlen)
@@ -359,7 +360,8 @@ int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen)
 
 /* The per-pixel kernel over rows [row0, row0 + nrows): CW_PIX_GROUPS work-groups per compute
  * unit, which take the launch's runs of pixels one at a time (cw_pixel). */
-static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, char *err, size_t errlen)
+static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, cl_int first, char *err,
+                     size_t errlen)
 {
     const char *k = "cw_pixel";
     cl_kernel kn = r->k_pixel;
@@ -377,7 +379,8 @@ static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, char 
         set_arg(kn, PIXEL_ROW0, sizeof crow0, &crow0, k, r, err, errlen) ||
         set_arg(kn, PIXEL_NROWS, sizeof cnrows, &cnrows, k, r, err, errlen) ||
         set_arg(kn, PIXEL_SX, sizeof sx, &sx, k, r, err, errlen) ||
-        set_arg(kn, PIXEL_SY, sizeof sy, &sy, k, r, err, errlen))
+        set_arg(kn, PIXEL_SY, sizeof sy, &sy, k, r, err, errlen) ||
+        set_arg(kn, PIXEL_FIRST, sizeof first, &first, k, r, err, errlen))
         return -1;
     e = clEnqueueNDRangeKernel(r->queue, kn, 1, NULL, &global, &local, 0, NULL, NULL);
     if (e != CL_SUCCESS) {
@@ -468,7 +471,7 @@ static int trace_band_pixel(renderer *r, int sample, int row0, int nrows, double
         int n = y + rows > row0 + nrows ? row0 + nrows - y : rows;
         if (rpass_fill_zero(r, r->counters, CW_NUM_COUNTERS * sizeof(cl_int), "counters", err,
                             errlen) ||
-            run_pixel(r, y, n, sx, sy, err, errlen) ||
+            run_pixel(r, y, n, sx, sy, r->overwrite && sample == 0, err, errlen) ||
             rpass_read(r, r->counters, sizeof counts, counts, "counters", err, errlen) ||
             stats_lap(r, &tl, &r->stats.pixel_s, err, errlen))
             return -1;

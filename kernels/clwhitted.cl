@@ -32,7 +32,8 @@
  * 1.58 s against 0.20 s without it at 512x512, gears 2.14 s against 0.32 s (PoCL: no change). */
 __kernel __attribute__((vec_type_hint(float4))) void
 cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_material *materials,
-         __global float *image, __global int *counters, int row0, int nrows, float sx, float sy)
+         __global float *image, __global int *counters, int row0, int nrows, float sx, float sy,
+         int first)
 {
     int runs = (f->nx + CW_PIX_RUN - 1) / CW_PIX_RUN, jobs = runs * nrows, k;
     pix_counts sum;
@@ -47,7 +48,8 @@ cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_mater
         x = (job - y * runs) * CW_PIX_RUN;
         x1 = min(f->nx, x + CW_PIX_RUN);
         for (; x < x1; x++)
-            pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy, &sum);
+            pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy, first,
+                      &sum);
     }
     for (k = 0; k < CW_COUNT_DEPTH; k++)
         if (pix_counted(k) && sum.n[k] != 0)
