@@ -64,7 +64,7 @@ CW_INLINE float shade_pow(float x, float p)
      * is of a positive number: 128 added to the exponent and taken off after) */
     bits = cw_as_int(x);
     e = ((bits - 0x3f3504f3 + (128 << 23)) >> 23) - 128;
-    m = cw_as_float(bits - (e << 23));
+    m = cw_as_float(bits - e * (1 << 23)); /* e < 0: a product, not a shift */
     s = (m - 1.0f) / (m + 1.0f);
     s2 = s * s;
     s4 = s2 * s2;
