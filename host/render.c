@@ -399,61 +399,51 @@ int renderer_trace(renderer *r, int sample, int row0, int nrows, char *err, size
                  sample, row0, row0 + nrows - 1, r->host_frame.ny);
         return -1;
     }
-    return rpass_trace_band(r, sample, row0, nrows, 0.0, 1.0, err, errlen);
+    return rpass_trace_band(r, sample, row0, nrows, 0, 0.0, 1.0, err, errlen);
 }
 
-/* The accumulation image, nx * ny rgb + count floats, mapped for reading: on a CPU device
- * the buffer's own memory, read in place (a read into a new host array cost 45 ms at
- * 2048x2048, its first touch and the copy). NULL on failure; unmap_accumulation after. */
-static float *map_accumulation(renderer *r, char *err, size_t errlen)
+/* img (allocated here at width x height) from the accumulation image, nx * ny rgb + count
+ * floats of the frame now uploaded: the mean of each pixel's samples, or with spd the
+ * average of each pixel's four corners (render_rows.c). The accumulation is mapped, which on
+ * a CPU device reads the buffer's own memory in place (a read into a new host array cost
+ * 45 ms at 2048x2048: its first touch and the copy). On failure img is left empty. */
+static int resolve_accumulation(renderer *r, image *img, int width, int height, int spd, char *err,
+                                size_t errlen)
 {
     size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
+    const char *call;
     cl_int e;
     float *px;
     if (rpass_ensure_image(r, err, errlen))
-        return NULL;
+        return -1;
+    if (image_alloc(img, width, height) != 0) {
+        snprintf(err, errlen, "out of memory for a %dx%d image", width, height);
+        return -1;
+    }
     px = clEnqueueMapBuffer(r->queue, r->image, CL_TRUE, CL_MAP_READ, 0, n * 4 * sizeof *px, 0,
                             NULL, NULL, &e);
-    if (e != CL_SUCCESS || !px) {
-        rpass_fail(e != CL_SUCCESS ? e : CL_INVALID_VALUE, "clEnqueueMapBuffer(image)", r, err,
-                   errlen);
-        return NULL;
+    if (e != CL_SUCCESS) {
+        call = "clEnqueueMapBuffer(image)";
+        goto out_free_image;
     }
-    return px;
-}
-
-/* Gives back a map_accumulation (the queue's next commands run after the unmap). A failure
- * is reported (non-zero) unless an error is already in err (rc non-zero). */
-static int unmap_accumulation(renderer *r, float *px, int rc, char *err, size_t errlen)
-{
-    cl_int e = clEnqueueUnmapMemObject(r->queue, r->image, px, 0, NULL, NULL);
-    if (e != CL_SUCCESS && rc == 0)
-        return rpass_fail(e, "clEnqueueUnmapMemObject(image)", r, err, errlen);
-    return e != CL_SUCCESS ? -1 : rc;
+    if (spd)
+        rrows_resolve_spd(px, img);
+    else
+        rrows_resolve_mean(px, img);
+    e = clEnqueueUnmapMemObject(r->queue, r->image, px, 0, NULL, NULL);
+    if (e == CL_SUCCESS)
+        return 0;
+    call = "clEnqueueUnmapMemObject(image)";
+out_free_image:
+    image_free(img);
+    return rpass_fail(e, call, r, err, errlen);
 }
 
 int renderer_read(renderer *r, image *img, char *err, size_t errlen)
 {
-    size_t n = (size_t)r->host_frame.nx * (size_t)r->host_frame.ny;
-    float *px;
-    int rc = 0;
-
     if (rpass_need_scene(r, err, errlen))
         return -1;
-    if (image_alloc(img, r->host_frame.nx, r->host_frame.ny) != 0) {
-        snprintf(err, errlen, "out of memory for a %zu-pixel image", n);
-        return -1;
-    }
-    px = map_accumulation(r, err, errlen);
-    if (!px) {
-        image_free(img);
-        return -1;
-    }
-    rrows_resolve_mean(px, img);
-    rc = unmap_accumulation(r, px, rc, err, errlen);
-    if (rc != 0)
-        image_free(img);
-    return rc;
+    return resolve_accumulation(r, img, r->host_frame.nx, r->host_frame.ny, 0, err, errlen);
 }
 
 static int write_frame(renderer *r, char *err, size_t errlen)
@@ -462,24 +452,21 @@ static int write_frame(renderer *r, char *err, size_t errlen)
                        errlen);
 }
 
-/* Every sample of every band into the accumulation image, which starts empty: cleared
- * first, or with the per-pixel kernel written (not added to) by the first sample, which
- * covers every pixel. The clear cost 40 ms at 2048x2048 on one thread (64 MB filled, its
- * first touch); the kernel's first writes take that touch on all the device's threads. */
+/* Every sample of every band into the accumulation image, the first sample starting
+ * each band empty (rpass_trace_band's `first`): with the per-pixel kernel nothing is
+ * cleared (a clear of the whole image cost 40 ms at 2048x2048 on one thread, 64 MB filled
+ * and first touched; the kernel's first writes take that touch on all its threads). */
 static int trace_all(renderer *r, int spp, char *err, size_t errlen)
 {
-    int k, row0, rows = rpass_band_rows(r), ny = r->host_frame.ny, rc = 0;
-    r->overwrite = r->strategy == RENDER_PIXEL;
-    if (!r->overwrite && rpass_clear_accumulation(r, err, errlen))
-        return -1;
-    for (k = 0; k < spp && rc == 0; k++)
-        for (row0 = 0; row0 < ny && rc == 0; row0 += rows) {
+    int k, row0, rows = rpass_band_rows(r), ny = r->host_frame.ny;
+    for (k = 0; k < spp; k++)
+        for (row0 = 0; row0 < ny; row0 += rows) {
             int nr = row0 + rows > ny ? ny - row0 : rows;
             double done = ((double)k + (double)row0 / ny) / spp;
-            rc = rpass_trace_band(r, k, row0, nr, done, (double)nr / ny / spp, err, errlen);
+            if (rpass_trace_band(r, k, row0, nr, k == 0, done, (double)nr / ny / spp, err, errlen))
+                return -1;
         }
-    r->overwrite = 0;
-    return rc;
+    return 0;
 }
 
 /* The SPD procedure: rays through the (nx+1) x (ny+1) pixel corners (rrows_spd_frame),
@@ -487,26 +474,11 @@ static int trace_all(renderer *r, int spp, char *err, size_t errlen)
 static int render_spd(renderer *r, image *img, char *err, size_t errlen)
 {
     cw_frame saved = r->host_frame;
-    float *px = NULL;
     int rc = -1;
 
     rrows_spd_frame(&saved, &r->host_frame);
-    if (write_frame(r, err, errlen) || trace_all(r, 1, err, errlen))
-        goto out_restore;
-    if (image_alloc(img, saved.nx, saved.ny) != 0) {
-        snprintf(err, errlen, "out of memory for a %dx%d image", saved.nx, saved.ny);
-        goto out_restore;
-    }
-    px = map_accumulation(r, err, errlen);
-    if (!px)
-        goto out_free_image;
-    rrows_resolve_spd(px, img);
-    rc = unmap_accumulation(r, px, 0, err, errlen);
-    if (rc == 0)
-        goto out_restore;
-out_free_image:
-    image_free(img);
-out_restore:
+    if (write_frame(r, err, errlen) == 0 && trace_all(r, 1, err, errlen) == 0)
+        rc = resolve_accumulation(r, img, saved.nx, saved.ny, 1, err, errlen);
     r->host_frame = saved;
     if (write_frame(r, err, errlen) != 0)
         rc = -1;
@@ -537,7 +509,7 @@ static int warm_up(renderer *r, char *err, size_t errlen)
     int rc;
     r->progress = NULL;
     rc = rpass_clear_rows(r, 0, 1, err, errlen) ||
-                 rpass_trace_band(r, 0, 0, 1, 0.0, 0.0, err, errlen)
+                 rpass_trace_band(r, 0, 0, 1, 0, 0.0, 0.0, err, errlen)
              ? -1
              : 0;
     r->progress = fn;

@@ -33,8 +33,6 @@ struct renderer {
     char options[1024]; /* build options of `program` */
     int strategy;       /* of `program`: RENDER_WAVEFRONT (the four wavefront kernels) or
                          * RENDER_PIXEL (k_pixel) */
-    int overwrite;      /* trace_all with the per-pixel kernel: its first sample writes each
-                         * pixel instead of adding to it, so the image is not cleared first */
     cl_kernel k_raygen, k_intersect, k_shade, k_occlude, k_pixel;
     /* scene buffers: the world, and the lights and materials of the shading kernel */
     render_world world;

@@ -454,8 +454,8 @@ static int stats_lap(renderer *r, double *t0, double *acc, char *err, size_t err
 /* The per-pixel strategy: the band in launches of about CW_PIXEL_LAUNCH_PIXELS pixels, the
  * counters read after each (the only wait). The band's deepest ray is the number of
  * levels the wavefront runs for it: the bands are the wavefront's, so the passes are too. */
-static int trace_band_pixel(renderer *r, int sample, int row0, int nrows, double done, double share,
-                            char *err, size_t errlen)
+static int trace_band_pixel(renderer *r, int sample, int row0, int nrows, int first, double done,
+                            double share, char *err, size_t errlen)
 {
     int rows = CW_PIXEL_LAUNCH_PIXELS / r->host_frame.nx, depth = 1, y;
     float sx, sy;
@@ -471,7 +471,7 @@ static int trace_band_pixel(renderer *r, int sample, int row0, int nrows, double
         int n = y + rows > row0 + nrows ? row0 + nrows - y : rows;
         if (rpass_fill_zero(r, r->counters, CW_NUM_COUNTERS * sizeof(cl_int), "counters", err,
                             errlen) ||
-            run_pixel(r, y, n, sx, sy, r->overwrite && sample == 0, err, errlen) ||
+            run_pixel(r, y, n, sx, sy, first, err, errlen) ||
             rpass_read(r, r->counters, sizeof counts, counts, "counters", err, errlen) ||
             stats_lap(r, &tl, &r->stats.pixel_s, err, errlen))
             return -1;
@@ -550,10 +550,12 @@ static int trace_band_wavefront(renderer *r, int sample, int row0, int nrows, do
     return 0;
 }
 
-int rpass_trace_band(renderer *r, int sample, int row0, int nrows, double done, double share,
-                     char *err, size_t errlen)
+int rpass_trace_band(renderer *r, int sample, int row0, int nrows, int first, double done,
+                     double share, char *err, size_t errlen)
 {
     if (r->strategy == RENDER_PIXEL)
-        return trace_band_pixel(r, sample, row0, nrows, done, share, err, errlen);
+        return trace_band_pixel(r, sample, row0, nrows, first, done, share, err, errlen);
+    if (first && rpass_clear_rows(r, row0, nrows, err, errlen))
+        return -1;
     return trace_band_wavefront(r, sample, row0, nrows, done, share, err, errlen);
 }

@@ -50,9 +50,13 @@ int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen);
 
 /* Traces sample number `sample` for rows [row0, row0 + nrows) into the accumulation image,
  * with the program's strategy: the wavefront (ray generation, then per depth level one
- * intersect, one shade and one occlude launch) or per-pixel launches. Progress is
- * reported after each level or launch as done + share * (the band's part done). */
-int rpass_trace_band(renderer *r, int sample, int row0, int nrows, double done, double share,
-                     char *err, size_t errlen);
+ * intersect, one shade and one occlude launch) or per-pixel launches. With `first` the
+ * band's pixels start empty, whatever the image held (the first sample needs no clear
+ * before it: the per-pixel kernel writes each pixel instead of adding to it, the
+ * wavefront, which adds to a pixel from several rays, clears the band's rows first);
+ * else the sample is added to them. Progress is reported after each level or launch as
+ * done + share * (the band's part done). */
+int rpass_trace_band(renderer *r, int sample, int row0, int nrows, int first, double done,
+                     double share, char *err, size_t errlen);
 
 #endif

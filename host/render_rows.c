@@ -122,8 +122,9 @@ void renderer_accum_size(const renderer *r, int *width, int *height)
     *height = r->host_frame.ny + extra;
 }
 
-/* Clears rows [row0, row0 + nrows) of the accumulation, traces every sample into them in
- * the whole-image render's order (sample by sample, each in bands), reads them back. */
+/* Traces every sample into rows [row0, row0 + nrows) of the accumulation in the
+ * whole-image render's order (sample by sample, each in bands; the first starts them
+ * empty), reads them back. */
 static int rows_trace(renderer *r, int spp, int row0, int nrows, float *acc, char *err,
                       size_t errlen)
 {
@@ -131,13 +132,11 @@ static int rows_trace(renderer *r, int spp, int row0, int nrows, float *acc, cha
     int k, y, band = rpass_band_rows(r);
     cl_int e;
 
-    if (rpass_clear_rows(r, row0, nrows, err, errlen))
-        return -1;
     for (k = 0; k < spp; k++)
         for (y = row0; y < row0 + nrows; y += band) {
             int n = y + band > row0 + nrows ? row0 + nrows - y : band;
             double done = ((double)k + (double)(y - row0) / nrows) / spp;
-            if (rpass_trace_band(r, k, y, n, done, (double)n / nrows / spp, err, errlen))
+            if (rpass_trace_band(r, k, y, n, k == 0, done, (double)n / nrows / spp, err, errlen))
                 return -1;
         }
     e = clEnqueueReadBuffer(r->queue, r->image, CL_TRUE, row_bytes * (size_t)row0,

@@ -151,23 +151,28 @@ CW_INLINE cw_lanes vl_max(cw_lanes a, cw_lanes b)
 {
     return a > b ? a : b;
 }
-/* The lanes where a <= b, as a bit mask (bit i: lane i). On x86 with AVX (PoCL's and
- * Intel's CPU devices) one movemask of the comparison's sign bits; elsewhere the lanes'
- * bits or'ed together. */
-CW_INLINE unsigned vl_le_mask(cw_lanes a, cw_lanes b)
+/* The lanes of a comparison's result m (-1 true, 0 false) as a bit mask (bit i: lane i).
+ * On x86 with AVX (PoCL's and Intel's CPU devices) one movemask of the sign bits;
+ * elsewhere the lanes' bits or'ed together. */
+CW_INLINE unsigned vl_bits(cw_lanes_int m)
 {
 #if CW_BVH_WIDTH == 8 && defined(__AVX__) && defined(__x86_64__)
-    return (unsigned)__builtin_ia32_movmskps256(as_float8(a <= b));
+    return (unsigned)__builtin_ia32_movmskps256(as_float8(m));
 #else
 #if CW_BVH_WIDTH == 8
-    int8 m = (a <= b) & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
-    int4 h = m.lo | m.hi;
+    int8 b = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    int4 h = b.lo | b.hi;
 #else
-    int4 h = (a <= b) & (int4)(1, 2, 4, 8);
+    int4 h = m & (int4)(1, 2, 4, 8);
 #endif
     int2 q = h.lo | h.hi;
     return (unsigned)(q.x | q.y);
 #endif
+}
+/* The lanes where a <= b, as a bit mask */
+CW_INLINE unsigned vl_le_mask(cw_lanes a, cw_lanes b)
+{
+    return vl_bits(a <= b);
 }
 /* p[0, CW_BVH_WIDTH) = the lanes of a */
 CW_INLINE void vl_store(cw_lanes a, float *p)
@@ -181,17 +186,10 @@ CW_INLINE void vl_store(cw_lanes a, float *p)
 /* The lanes where p[lane] == 0, as a bit mask: one vector load and compare */
 CW_INLINE unsigned vl_zero_mask(CW_GLOBAL const int *p)
 {
-#if CW_BVH_WIDTH == 8 && defined(__AVX__) && defined(__x86_64__)
-    return (unsigned)__builtin_ia32_movmskps256(as_float8(vload8(0, p) == (int8)(0)));
-#else
 #if CW_BVH_WIDTH == 8
-    int8 m = (vload8(0, p) == (int8)(0)) & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
-    int4 h = m.lo | m.hi;
+    return vl_bits(vload8(0, p) == (int8)(0));
 #else
-    int4 h = (vload4(0, p) == (int4)(0)) & (int4)(1, 2, 4, 8);
-#endif
-    int2 q = h.lo | h.hi;
-    return (unsigned)(q.x | q.y);
+    return vl_bits(vload4(0, p) == (int4)(0));
 #endif
 }
 #else /* host C99 */
