@@ -172,28 +172,43 @@ static int thread_count(int threads)
     return threads < CW_BVH_MAX_THREADS ? threads : CW_BVH_MAX_THREADS;
 }
 
-static int build(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n, int max_leaf,
-                 int threads, char *err, size_t errlen);
+static int build(bvh *out, const bvh_box *boxes, bvh_box **take, const unsigned char *blocks, int n,
+                 int max_leaf, int threads, char *err, size_t errlen);
 
 int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, size_t errlen)
 {
-    return build(out, boxes, NULL, n, max_leaf, CW_BVH_THREADS, err, errlen);
+    return build(out, boxes, NULL, NULL, n, max_leaf, CW_BVH_THREADS, err, errlen);
 }
 
 int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int threads, char *err,
                       size_t errlen)
 {
-    return build(out, boxes, NULL, n, max_leaf, threads, err, errlen);
+    return build(out, boxes, NULL, NULL, n, max_leaf, threads, err, errlen);
 }
 
 int bvh_build_blocks(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n,
                      int max_leaf, int threads, char *err, size_t errlen)
 {
-    return build(out, boxes, blocks, n, max_leaf, threads, err, errlen);
+    return build(out, boxes, NULL, blocks, n, max_leaf, threads, err, errlen);
 }
 
-static int build(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n, int max_leaf,
-                 int threads, char *err, size_t errlen)
+int bvh_build_blocks_take(bvh *out, bvh_box **boxes, const unsigned char *blocks, int n,
+                          int max_leaf, int threads, char *err, size_t errlen)
+{
+    return build(out, *boxes, boxes, blocks, n, max_leaf, threads, err, errlen);
+}
+
+/* The builder's copy of the boxes is made: a caller's array given to it (take) is freed. */
+static void drop_taken(bvh_box **take)
+{
+    if (take) {
+        free(*take);
+        *take = NULL;
+    }
+}
+
+static int build(bvh *out, const bvh_box *boxes, bvh_box **take, const unsigned char *blocks, int n,
+                 int max_leaf, int threads, char *err, size_t errlen)
 {
     cw_bvh_node *shrunk;
     sah_builder bd;
@@ -203,14 +218,16 @@ static int build(bvh *out, const bvh_box *boxes, const unsigned char *blocks, in
     memset(&bd, 0, sizeof bd);
     if (n < 0 || n > BVH_MAX_PRIMS) {
         snprintf(err, errlen, "bvh: %d primitives (the most is %d)", n, BVH_MAX_PRIMS);
-        return -1;
+        goto out_drop;
     }
     if (max_leaf < 1) {
         snprintf(err, errlen, "bvh: maximum leaf size %d (must be at least 1)", max_leaf);
-        return -1;
+        goto out_drop;
     }
-    if (n == 0)
+    if (n == 0) {
+        drop_taken(take);
         return 0;
+    }
 
     bd.nodes = malloc((size_t)(2 * n - 1) * sizeof *bd.nodes);
     if (!bd.nodes)
@@ -227,6 +244,7 @@ static int build(bvh *out, const bvh_box *boxes, const unsigned char *blocks, in
         bd.w[i].idx = i;
         bd.w[i].block = blocks && blocks[i] <= BVH_BLOCK_CLASSES ? blocks[i] : 0;
     }
+    drop_taken(take); /* before the build's own arrays fill */
     bd.max_leaf = max_leaf;
     bd.threads = n >= PAR_MIN_PRIMS ? thread_count(threads) : 1;
     sah_task_range(&root, bd.w, 0, n);
@@ -257,6 +275,8 @@ out_free_nodes:
 out_oom:
     memset(out, 0, sizeof *out);
     snprintf(err, errlen, "bvh: out of memory for %d primitives", n);
+out_drop:
+    drop_taken(take);
     return -1;
 }
 

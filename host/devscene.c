@@ -552,12 +552,12 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
         blocks[i] = CW_REF_KIND(ds->box_ref[i]) == CW_PRIM_TRIANGLE ? 1
                     : CW_REF_KIND(ds->box_ref[i]) == CW_PRIM_SPHERE ? 2
                                                                     : 0;
-    rc = bvh_build_blocks(&ds->tree, ds->boxes, blocks, ds->nbox, 4, CW_BVH_THREADS, err, errlen);
+    /* the builder frees the boxes once it has its own copy */
+    rc = bvh_build_blocks_take(&ds->tree, &ds->boxes, blocks, ds->nbox, 4, CW_BVH_THREADS, err,
+                               errlen);
     free(blocks);
     if (rc != 0)
         return -1;
-    free(ds->boxes); /* the builder has its own copy of what it needs */
-    ds->boxes = NULL;
     if (bvh_collapse_wide(&ds->tree, &ds->tree_wide, err, errlen) != 0)
         return -1;
     if (ds->tree_wide.stack_need > CW_BVH_STACK) {

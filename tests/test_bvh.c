@@ -975,6 +975,45 @@ static void test_block_leaves(void **state)
     free(b);
 }
 
+/* bvh_build_blocks_take: the same tree as bvh_build_blocks, bit for bit, with the caller's
+ * boxes freed and its pointer cleared (the sanitizer build would report a leak or a double
+ * free); also when the build fails or is empty. */
+static void test_build_take(void **state)
+{
+    int n = 30000;
+    bvh_box *b = random_boxes(n, 73, 10.0f, 0.4f), *given = malloc((size_t)n * sizeof *b);
+    unsigned char *mixed = malloc((size_t)n);
+    char err[256] = "";
+    bvh kept, taken;
+    (void)state;
+    assert_non_null(given);
+    assert_non_null(mixed);
+    memcpy(given, b, (size_t)n * sizeof *b);
+    for (int i = 0; i < n; i++)
+        mixed[i] = (unsigned char)(i % 3 != 0);
+    assert_int_equal(bvh_build_blocks(&kept, b, mixed, n, 4, 2, err, sizeof err), 0);
+    assert_int_equal(bvh_build_blocks_take(&taken, &given, mixed, n, 4, 2, err, sizeof err), 0);
+    assert_null(given);
+    assert_int_equal(taken.num_nodes, kept.num_nodes);
+    assert_memory_equal(taken.nodes, kept.nodes, (size_t)kept.num_nodes * sizeof *kept.nodes);
+    assert_memory_equal(taken.refs, kept.refs, (size_t)n * sizeof *kept.refs);
+    check_tree(&taken, b, n, 4, 1, "taken boxes");
+    bvh_free(&taken);
+    given = malloc(sizeof *given); /* a failed build (leaf size 0) frees them too */
+    assert_non_null(given);
+    assert_int_equal(bvh_build_blocks_take(&taken, &given, NULL, 1, 0, 1, err, sizeof err), -1);
+    assert_null(given);
+    assert_int_equal(taken.num_nodes, 0);
+    given = malloc(sizeof *given); /* and an empty one */
+    assert_non_null(given);
+    assert_int_equal(bvh_build_blocks_take(&taken, &given, NULL, 0, 4, 1, err, sizeof err), 0);
+    assert_null(given);
+    assert_int_equal(taken.num_nodes, 0);
+    bvh_free(&kept);
+    free(mixed);
+    free(b);
+}
+
 /* ======================================================================================== */
 /* The root split against a plain reference of the binned SAH                               */
 
@@ -1678,6 +1717,7 @@ int main(void)
         cmocka_unit_test(test_million_triangles),
         cmocka_unit_test(test_threads_identical),
         cmocka_unit_test(test_block_leaves),
+        cmocka_unit_test(test_build_take),
         cmocka_unit_test(test_root_split_reference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
