@@ -74,7 +74,7 @@ static void caller_loop(par_state *s, par_emit_fn emit)
         if (s->done[slot]) {
             int rc;
             pthread_mutex_unlock(&s->mu);
-            rc = emit(s->ctx, s->next_emit); /* next_emit changes only here */
+            rc = emit ? emit(s->ctx, s->next_emit) : 0; /* next_emit changes only here */
             pthread_mutex_lock(&s->mu);
             if (rc && !s->rc)
                 s->rc = rc;
@@ -95,7 +95,7 @@ static int run_serial(int njobs, par_job_fn job, par_emit_fn emit, void *ctx)
 {
     int j, rc;
     for (j = 0; j < njobs; j++)
-        if ((rc = job(ctx, j, 0)) != 0 || (rc = emit(ctx, j)) != 0)
+        if ((rc = job(ctx, j, 0)) != 0 || (emit && (rc = emit(ctx, j)) != 0))
             return rc;
     return 0;
 }

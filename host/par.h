@@ -6,7 +6,8 @@
 
 /* job(ctx, j, thread) computes job j on thread `thread` (0 is the caller; thread indices are
  * below the `threads` given to par_ordered, so per-thread state can be an array); emit(ctx,
- * j) consumes its result on the calling thread. Both return 0, or non-zero to stop. */
+ * j) consumes its result on the calling thread (emit NULL: jobs whose results are written
+ * in place, nothing to consume). Both return 0, or non-zero to stop. */
 typedef int (*par_job_fn)(void *ctx, int job, int thread);
 typedef int (*par_emit_fn)(void *ctx, int job);
 

@@ -499,19 +499,16 @@ int render_check_crop(const render_settings *st, int width, int height, char *er
     return 0;
 }
 
-/* Traces one (cleared) row once: the first launch, where a driver
- * may compile the kernel for the device, timed apart (stats.warmup_s). No progress
- * report, and the counts are reset by the caller. */
+/* Traces one row once, as a first sample (its pixels start empty): the first launch, where
+ * a driver may compile the kernel for the device, timed apart (stats.warmup_s). No
+ * progress report, and the counts are reset by the caller. */
 static int warm_up(renderer *r, char *err, size_t errlen)
 {
     render_progress_fn fn = r->progress;
     double t0 = sys_now();
     int rc;
     r->progress = NULL;
-    rc = rpass_clear_rows(r, 0, 1, err, errlen) ||
-                 rpass_trace_band(r, 0, 0, 1, 0, 0.0, 0.0, err, errlen)
-             ? -1
-             : 0;
+    rc = rpass_trace_band(r, 0, 0, 1, 1, 0.0, 0.0, err, errlen);
     r->progress = fn;
     if (rc == 0) {
         cl_int e = clFinish(r->queue);

@@ -77,13 +77,6 @@ static int resolve_job(void *ctx, int job, int thread)
     return 0;
 }
 
-static int resolve_emit(void *ctx, int job)
-{
-    (void)ctx;
-    (void)job;
-    return 0;
-}
-
 static void resolve(const float *px, image *img, int spd)
 {
     resolve_ctx c;
@@ -91,7 +84,7 @@ static void resolve(const float *px, image *img, int spd)
     c.px = px;
     c.img = img;
     c.spd = spd;
-    (void)par_ordered(jobs, sys_cpu_count(), jobs, resolve_job, resolve_emit, &c);
+    (void)par_ordered(jobs, sys_cpu_count(), jobs, resolve_job, NULL, &c);
 }
 
 void rrows_resolve_mean(const float *px, image *img)

@@ -10,6 +10,25 @@
 #include "vecmath.h"
 #include "world.h"
 
+/* The lane of block b to report among the lanes m whose hits lie at lt[lane]: the closest
+ * below tmax, leaving out unused lanes and the triangle whose CW_REF is skip - 1; the first
+ * of equally close ones (as testing them one by one in lane order); -1 for none. Both
+ * isect_tri4 paths end with it. */
+CW_INLINE int tri4_nearest(CW_GLOBAL const cw_tri4 *b, unsigned m, const float *lt, float tmax,
+                           int skip)
+{
+    int best = -1;
+    while (m != 0u) {
+        int i = cw_ctz(m), idx = b->index[i];
+        m &= m - 1u;
+        if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip || !(lt[i] < tmax))
+            continue;
+        tmax = lt[i];
+        best = i;
+    }
+    return best;
+}
+
 #if CW_FAST
 /* Ray-triangle, fast path: Moeller-Trumbore with a plain determinant epsilon. */
 CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo *ri, float tmin,
@@ -65,13 +84,13 @@ CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float
     cw_float4 sx = v4_sub(v4_splat(ri->o.x), b->v[0]), sy = v4_sub(v4_splat(ri->o.y), b->v[1]);
     cw_float4 sz = v4_sub(v4_splat(ri->o.z), b->v[2]);
     cw_float4 u = v4_mul(v4_add(v4_add(v4_mul(sx, px), v4_mul(sy, py)), v4_mul(sz, pz)), inv);
-    cw_float4 zero = v4_splat(0.0f), one = v4_splat(1.0f), eps = v4_splat(1e-9f), qx, qy, qz, v, t;
+    cw_float4 zero = v4_splat(0.0f), one = v4_splat(1.0f), qx, qy, qz, v, t;
     /* isect_triangle's misses so far: |det| < 1e-9, u < 0, u > 1 */
-    cw_int4 small = m4_and(v4_lt(det, eps), v4_gt(det, v4_sub(zero, eps)));
+    cw_int4 small = m4_and(v4_lt(det, v4_splat(1e-9f)), v4_gt(det, v4_splat(-1e-9f)));
     cw_int4 out = m4_or(small, m4_or(v4_lt(u, zero), v4_gt(u, one)));
     unsigned m = ~m4_bits(out) & 15u;
     float lu[4], lv[4], lt[4];
-    int best = -1;
+    int best;
     if (m == 0u)
         return -1;
     qx = v4_sub(v4_mul(sy, e1z), v4_mul(sz, e1y));
@@ -86,16 +105,11 @@ CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float
     v4_store(u, lu);
     v4_store(v, lv);
     v4_store(t, lt);
-    while (m != 0u) {
-        int i = cw_ctz(m), idx = b->index[i];
-        m &= m - 1u;
-        if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip || !(lt[i] < tmax))
-            continue;
-        tmax = lt[i];
-        *t_out = lt[i];
-        *u_out = lu[i];
-        *v_out = lv[i];
-        best = i;
+    best = tri4_nearest(b, m, lt, tmax, skip);
+    if (best >= 0) {
+        *t_out = lt[best];
+        *u_out = lu[best];
+        *v_out = lv[best];
     }
     return best;
 }
@@ -172,7 +186,7 @@ CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float
     cw_int4 pos = m4_or(m4_or(v4_gt(u, zero), v4_gt(v, zero)), v4_gt(w, zero));
     unsigned m = m4_bits(m4_andnot(m4_and(neg, pos), v4_ne(det, zero)));
     float lv[4], lw[4], lt[4], li[4];
-    int best = -1;
+    int best;
     if (m == 0u)
         return -1;
     tt = v4_add(v4_add(v4_mul(u, v4_mul(sz, az)), v4_mul(v, v4_mul(sz, bz))),
@@ -186,16 +200,11 @@ CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float
     v4_store(w, lw);
     v4_store(t, lt);
     v4_store(inv, li);
-    while (m != 0u) {
-        int i = cw_ctz(m), idx = b->index[i];
-        m &= m - 1u;
-        if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip || !(lt[i] < tmax))
-            continue;
-        tmax = lt[i];
-        *t_out = lt[i];
-        *u_out = lv[i] * li[i];
-        *v_out = lw[i] * li[i];
-        best = i;
+    best = tri4_nearest(b, m, lt, tmax, skip);
+    if (best >= 0) {
+        *t_out = lt[best];
+        *u_out = lv[best] * li[best];
+        *v_out = lw[best] * li[best];
     }
     return best;
 }
