@@ -45,6 +45,9 @@ if [ -s "$CSV" ]; then
     if awk -F, 'NR > 1 && $2 == "spp4-d1-robust" && $12 > 1e-4 && $14 > 1e-3 && $9 > 0 { n++ }
                 END { exit n != 1 }' "$CSV"; then ok; else
         fail "depth 1 against the reference: RMSE and FLIP > 0 expected"; cat "$CSV"; fi
+    # clwhitted's own render and setup times were read from its summary line
+    if awk -F, 'NR > 1 && $10 + 0 > 0 && $11 + 0 > 0 { n++ } END { exit n != 2 }' "$CSV"
+    then ok; else fail "CSV: render_s and setup_s > 0 expected in every row"; cat "$CSV"; fi
     # the error-free setting is on both Pareto fronts
     if awk -F, 'NR > 1 && $2 == "spp4-d5-robust" && $15 == 1 && $16 == 1 { n++ }
                 END { exit n != 1 }' "$CSV"; then ok; else fail "Pareto flags"; cat "$CSV"; fi
