@@ -447,6 +447,7 @@ static void pack_spheres(devscene *ds, int first, int c, size_t b)
         set_lane(&blk->cz, lane, ce->z);
         set_lane(&blk->r, lane, ce->w);
         blk->index[lane] = idx;
+        blk->material[lane] = ds->sph[idx].material;
     }
     for (int k = c; k % 4 != 0; k++)
         ds->sph_blocks[b + (size_t)k / 4].index[k % 4] = -1;

@@ -25,7 +25,7 @@ _Static_assert(sizeof(cw_float4) == 16, "cw_float4 must be 16 bytes");
 _Static_assert(sizeof(cw_sphere) == 32, "cw_sphere layout");
 _Static_assert(sizeof(cw_triangle) == 64, "cw_triangle layout");
 _Static_assert(sizeof(cw_tri4) == 192, "cw_tri4 layout");
-_Static_assert(sizeof(cw_sph4) == 80, "cw_sph4 layout");
+_Static_assert(sizeof(cw_sph4) == 96, "cw_sph4 layout");
 _Static_assert(sizeof(cw_cone) == 48, "cw_cone layout");
 _Static_assert(sizeof(cw_shadow_ray) == 64, "cw_shadow_ray layout");
 _Static_assert(sizeof(cw_polygon) == 48, "cw_polygon layout");

@@ -103,7 +103,8 @@ CW_FORCE_INLINE void prim_sph4(const cw_world *w, int block, const cw_rayinfo *r
         hit->kind = CW_PRIM_SPHERE;
         hit->index = b->index[lane];
         hit->inst = 0;
-        hit->block = 0;
+        hit->block = block + 1;
+        hit->lane = lane;
     }
 }
 #endif

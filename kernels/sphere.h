@@ -112,13 +112,27 @@ CW_INLINE int isect_sph4(CW_GLOBAL const cw_sph4 *b, vec3 o, vec3 d, float tmin,
 CW_INLINE cw_surface surface_sphere(const cw_world *w, cw_hit hit, vec3 p)
 {
     cw_surface s;
-    CW_GLOBAL const cw_sphere *sp = &w->spheres[hit.index];
-    vec3 c = v3_from4(sp->center);
-    vec3 n = v3_norm(v3_sub(p, c));
+    vec3 c, n;
+    float radius;
+    int material;
+    if (hit.block > 0) { /* the block the test read: no second read of the sphere array */
+        CW_GLOBAL const cw_sph4 *b = &w->sph_blocks[hit.block - 1];
+        CW_GLOBAL const float *x = (CW_GLOBAL const float *)&b->cx;
+        int i = hit.lane;
+        c = v3(x[i], x[4 + i], x[8 + i]);
+        radius = x[12 + i];
+        material = b->material[i];
+    } else {
+        CW_GLOBAL const cw_sphere *sp = &w->spheres[hit.index];
+        c = v3_from4(sp->center);
+        radius = sp->center.w;
+        material = sp->material;
+    }
+    n = v3_norm(v3_sub(p, c));
     s.ng = n;
 #if !CW_FAST
     {
-        float r = cw_fabs(sp->center.w);
+        float r = cw_fabs(radius);
         p = v3_add(c, v3_scale(n, r));
         /* c is exact input: the error is that of r n (normalisation) and of the sum */
         s.err = v3_add(v3_scale(v3_abs(p), CW_GAMMA(2)),
@@ -127,7 +141,7 @@ CW_INLINE cw_surface surface_sphere(const cw_world *w, cw_hit hit, vec3 p)
 #endif
     s.ns = s.ng;
     s.flat = 0;
-    s.material = sp->material;
+    s.material = material;
     s.p = p;
     return s;
 }

@@ -55,10 +55,13 @@ typedef struct {
 
 /* Up to four spheres of one BVH leaf side by side, for one 4-wide ray-sphere test
  * (sphere.h): lane i of cx, cy, cz, r is sphere index[i]'s centre and radius (an index into
- * the sphere array); an unused lane has index -1 and radius 0 at the origin. */
+ * the sphere array) and material[i] its material, so that the surface at a hit in a block
+ * (cw_hit.block) is made from the block, not from a random read of the sphere array; an
+ * unused lane has index -1, material 0 and radius 0 at the origin. */
 typedef struct {
     cw_float4 cx, cy, cz, r;
     int index[4];
+    int material[4];
 } cw_sph4;
 
 /* The count of a wide-BVH leaf of blocks (cw_bvhw_node.count < -1) is -1 - (nb | kind):
@@ -220,7 +223,7 @@ typedef struct {
     int kind;   /* CW_PRIM_*; CW_PRIM_NONE for a miss */
     int index;  /* index into the array of that kind */
     int inst;   /* 1 + the instance whose mesh the hit triangle is in; 0: the world's */
-    int block;  /* a triangle hit in a block (cw_tri4): 1 + the block; 0: none */
+    int block;  /* a hit in a block (cw_tri4, cw_sph4 by kind): 1 + the block; 0: none */
     int lane;   /* and its lane there */
 } cw_hit;
 
