@@ -359,7 +359,7 @@ int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen)
 }
 
 /* The per-pixel kernel over rows [row0, row0 + nrows): CW_PIX_GROUPS work-groups per compute
- * unit, which take the launch's runs of pixels one at a time (cw_pixel). */
+ * unit, which take the launch's tiles of pixels one at a time (cw_pixel). */
 static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, cl_int first, char *err,
                      size_t errlen)
 {

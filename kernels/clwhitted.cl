@@ -18,15 +18,18 @@
 
 #if CW_PIXEL
 
-/* Rows [row0, row0 + nrows) in runs of CW_PIX_RUN consecutive pixels of a row (neighbours,
- * for coherent memory use), handed out one at a time through the counter CW_COUNT_NEXT
- * (zero at launch): a work-item takes runs until none is left, so the threads of a CPU device
- * finish together however unevenly the scene spreads its work over the image (with a row
- * per work-group, PoCL's threads took the groups in large chunks and one core idled at the
- * end of each launch: 5-15% of the render at 512x512). The counts are summed in private memory and
- * added to the counters once per work-item (the maximum for CW_COUNT_DEPTH); no barrier.
- * (A local-memory sum with a barrier after a guarded call let PoCL 3.1 run pix_trace for
- * padded work-items, writing past the image: see docs/portability.md.) */
+/* Rows [row0, row0 + nrows) in tiles of CW_PIX_TILE x CW_PIX_TILE pixels, row by row within a
+ * tile, handed out one at a time through the counter CW_COUNT_NEXT (zero at launch). A tile's
+ * rays are neighbours in both directions, so one core's cache keeps the nodes and blocks they
+ * share (with runs of 32 pixels of a row, the two threads taking alternate runs, 1M random
+ * triangles rendered 2-5% slower at 512x512). A work-item takes tiles until none is left, so
+ * the threads of a CPU device finish together however unevenly the scene spreads its work
+ * over the image (with a row per work-group, PoCL's threads took the groups in large chunks
+ * and one core idled at the end of each launch: 5-15% of the render at 512x512). The counts
+ * are summed in private memory and added to the counters once per work-item (the maximum for
+ * CW_COUNT_DEPTH); no barrier. (A local-memory sum with a barrier after a guarded call let
+ * PoCL 3.1 run pix_trace for padded work-items, writing past the image: see
+ * docs/portability.md.) */
 /* vec_type_hint(float4): the kernel's own vector width. Intel's CPU compiler otherwise runs
  * eight work-items in the lanes of one AVX register, and their rays diverge: mount took
  * 1.58 s against 0.20 s without it at 512x512, gears 2.14 s against 0.32 s (PoCL: no change). */
@@ -35,21 +38,24 @@ cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_mater
          __global float *image, __global int *counters, int row0, int nrows, float sx, float sy,
          int first)
 {
-    int runs = (f->nx + CW_PIX_RUN - 1) / CW_PIX_RUN, jobs = runs * nrows, k;
+    int cols = (f->nx + CW_PIX_TILE - 1) / CW_PIX_TILE, k;
+    int jobs = cols * ((nrows + CW_PIX_TILE - 1) / CW_PIX_TILE);
     pix_counts sum;
     cw_world w;
     CW_MAKE_WORLD(w);
     pix_clear(&sum);
     for (;;) {
-        int job = atomic_inc(&counters[CW_COUNT_NEXT]), y, x, x1;
+        int job = atomic_inc(&counters[CW_COUNT_NEXT]), ty, y, y1, x, x0, x1;
         if (job >= jobs)
             break;
-        y = job / runs;
-        x = (job - y * runs) * CW_PIX_RUN;
-        x1 = min(f->nx, x + CW_PIX_RUN);
-        for (; x < x1; x++)
-            pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy, first,
-                      &sum);
+        ty = job / cols;
+        y1 = min(nrows, (ty + 1) * CW_PIX_TILE);
+        x0 = (job - ty * cols) * CW_PIX_TILE;
+        x1 = min(f->nx, x0 + CW_PIX_TILE);
+        for (y = ty * CW_PIX_TILE; y < y1; y++)
+            for (x = x0; x < x1; x++)
+                pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy, first,
+                          &sum);
     }
     for (k = 0; k < CW_COUNT_DEPTH; k++)
         if (pix_counted(k) && sum.n[k] != 0)

@@ -99,11 +99,11 @@ typedef struct {
  * fewer). */
 #define CW_GROUP_SIZE 64
 
-/* The per-pixel kernel (cw_pixel) hands out the pixels of a launch in runs of CW_PIX_RUN
- * consecutive pixels of a row, one run at a time to whichever work-item asks next (an
- * atomic counter, CW_COUNT_NEXT), to CW_PIX_GROUPS work-groups of up to CW_PIX_LANES
- * work-items per compute unit. */
-#define CW_PIX_RUN 32
+/* The per-pixel kernel (cw_pixel) hands out the pixels of a launch in tiles of CW_PIX_TILE x
+ * CW_PIX_TILE pixels (cut at the launch's edges), one tile at a time to whichever work-item
+ * asks next (an atomic counter, CW_COUNT_NEXT), to CW_PIX_GROUPS work-groups of up to
+ * CW_PIX_LANES work-items per compute unit. */
+#define CW_PIX_TILE 16
 #define CW_PIX_LANES 16
 #define CW_PIX_GROUPS 4
 
