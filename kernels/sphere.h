@@ -106,33 +106,38 @@ CW_INLINE int isect_sph4(CW_GLOBAL const cw_sph4 *b, vec3 o, vec3 d, float tmin,
     return best;
 }
 
+/* Sphere i of block b as the sphere array holds it (cw_sphere.center): xyz its centre, w its
+ * radius. */
+CW_INLINE cw_float4 sph4_sphere(CW_GLOBAL const cw_sph4 *b, int i)
+{
+    CW_GLOBAL const float *x = (CW_GLOBAL const float *)&b->cx;
+    return v4_from3(v3(x[i], x[4 + i], x[8 + i]), x[12 + i]);
+}
+
 /* The surface at a sphere hit; p = o + t d is projected back onto the sphere. The
  * geometric normal points outwards for an inside-only sphere too (refraction tells a ray
- * entering its inside by it, as for any sphere). */
+ * entering its inside by it, as for any sphere). A hit in a block (hit.block) reads the
+ * block the test has just read, not the sphere array. */
 CW_INLINE cw_surface surface_sphere(const cw_world *w, cw_hit hit, vec3 p)
 {
     cw_surface s;
+    cw_float4 sphere;
     vec3 c, n;
-    float radius;
     int material;
-    if (hit.block > 0) { /* the block the test read: no second read of the sphere array */
+    if (hit.block > 0) {
         CW_GLOBAL const cw_sph4 *b = &w->sph_blocks[hit.block - 1];
-        CW_GLOBAL const float *x = (CW_GLOBAL const float *)&b->cx;
-        int i = hit.lane;
-        c = v3(x[i], x[4 + i], x[8 + i]);
-        radius = x[12 + i];
-        material = b->material[i];
+        sphere = sph4_sphere(b, hit.lane);
+        material = b->material[hit.lane];
     } else {
-        CW_GLOBAL const cw_sphere *sp = &w->spheres[hit.index];
-        c = v3_from4(sp->center);
-        radius = sp->center.w;
-        material = sp->material;
+        sphere = w->spheres[hit.index].center;
+        material = w->spheres[hit.index].material;
     }
+    c = v3_from4(sphere);
     n = v3_norm(v3_sub(p, c));
     s.ng = n;
 #if !CW_FAST
     {
-        float r = cw_fabs(radius);
+        float r = cw_fabs(sphere.w);
         p = v3_add(c, v3_scale(n, r));
         /* c is exact input: the error is that of r n (normalisation) and of the sum */
         s.err = v3_add(v3_scale(v3_abs(p), CW_GAMMA(2)),
