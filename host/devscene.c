@@ -21,6 +21,7 @@
     X(nodes, ds->tree_wide.nodes, ds->tree_wide.num_nodes)                                         \
     X(refs, ds->refs, ds->nrefs)                                                                   \
     X(spheres, ds->sph, ds->nsph)                                                                  \
+    X(sphere_materials, ds->sph_mat, ds->nsph)                                                     \
     X(triangles, ds->tri, ds->ntri)                                                                \
     X(tri_blocks, ds->tri_blocks, ds->nblocks)                                                     \
     X(sph_blocks, ds->sph_blocks, ds->nsph_blocks)                                                 \
@@ -88,6 +89,7 @@ static void find_materials(const scene *s, devscene *ft)
 void devscene_free(devscene *ds)
 {
     free(ds->sph);
+    free(ds->sph_mat);
     free(ds->tri);
     free(ds->tri_blocks);
     free(ds->sph_blocks);
@@ -230,6 +232,7 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
         return -1;
     }
     ds->sph = calloc(s->spheres.count + 1, sizeof *ds->sph);
+    ds->sph_mat = calloc(s->spheres.count + 1, sizeof *ds->sph_mat);
     ds->tri = calloc(s->triangles.count + nmtri + 1, sizeof *ds->tri);
     ds->normals = calloc(s->tri_normals.count + 1, sizeof *ds->normals);
     ds->pg = calloc(s->polygons.count + 1, sizeof *ds->pg);
@@ -240,8 +243,8 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
     ds->mats = calloc(s->materials.count + 1, sizeof *ds->mats);
     ds->boxes = calloc(ntop + 1, sizeof *ds->boxes);
     ds->box_ref = calloc(ntop + 1, sizeof *ds->box_ref);
-    if (!ds->sph || !ds->tri || !ds->normals || !ds->pg || !ds->verts || !ds->cones ||
-        !ds->lights || !ds->mats || !ds->boxes || !ds->box_ref) {
+    if (!ds->sph || !ds->sph_mat || !ds->tri || !ds->normals || !ds->pg || !ds->verts ||
+        !ds->cones || !ds->lights || !ds->mats || !ds->boxes || !ds->box_ref) {
         snprintf(err, errlen, "out of memory for a scene of %zu primitives", nprim);
         return -1;
     }
@@ -254,7 +257,7 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
         /* the radius keeps its sign: negative, the sphere is visible from inside only */
         cw_float4 c = local4(ds, ss->center, ss->radius);
         ds->sph[ds->nsph].center = c;
-        ds->sph[ds->nsph].material = ss->material;
+        ds->sph_mat[ds->nsph] = ss->material;
         box_empty(b.lo, b.hi);
         box_add_point(b.lo, b.hi, c.x - rad, c.y - rad, c.z - rad);
         box_add_point(b.lo, b.hi, c.x + rad, c.y + rad, c.z + rad);
@@ -447,7 +450,7 @@ static void pack_spheres(devscene *ds, int first, int c, size_t b)
         set_lane(&blk->cz, lane, ce->z);
         set_lane(&blk->r, lane, ce->w);
         blk->index[lane] = idx;
-        blk->material[lane] = ds->sph[idx].material;
+        blk->material[lane] = ds->sph_mat[idx];
     }
     for (int k = c; k % 4 != 0; k++)
         ds->sph_blocks[b + (size_t)k / 4].index[k % 4] = -1;

@@ -26,6 +26,7 @@ typedef struct {
  * level's nodes; each placement is a cw_instance whose box is in the top level. */
 typedef struct {
     cw_sphere *sph;
+    int *sph_mat; /* sphere i's material (kernels/types.h, cw_sphere) */
     cw_triangle *tri;
     cw_tri4 *tri_blocks; /* the leaves of triangles only, four to a block */
     cw_sph4 *sph_blocks; /* the leaves of spheres only, four to a block */

@@ -22,7 +22,7 @@
 #include "world.h"
 
 _Static_assert(sizeof(cw_float4) == 16, "cw_float4 must be 16 bytes");
-_Static_assert(sizeof(cw_sphere) == 32, "cw_sphere layout");
+_Static_assert(sizeof(cw_sphere) == 16, "cw_sphere layout");
 _Static_assert(sizeof(cw_triangle) == 64, "cw_triangle layout");
 _Static_assert(sizeof(cw_tri4) == 192, "cw_tri4 layout");
 _Static_assert(sizeof(cw_sph4) == 96, "cw_sph4 layout");

@@ -130,7 +130,7 @@ CW_INLINE cw_surface surface_sphere(const cw_world *w, cw_hit hit, vec3 p)
         material = b->material[hit.lane];
     } else {
         sphere = w->spheres[hit.index].center;
-        material = w->spheres[hit.index].material;
+        material = w->sphere_materials[hit.index];
     }
     c = v3_from4(sphere);
     n = v3_norm(v3_sub(p, c));

@@ -14,6 +14,7 @@
     X(cw_bvhw_node, nodes, "BVH nodes") /* the wide BVH */                                         \
     X(int, refs, "BVH references")      /* BVH leaf entries: CW_REF(kind, index) */                \
     X(cw_sphere, spheres, "spheres")                                                               \
+    X(int, sphere_materials, "sphere materials") /* sphere i's material */                         \
     X(cw_triangle, triangles, "triangles")                                                         \
     X(cw_tri4, tri_blocks, "triangle blocks") /* the leaves of triangles only, 4 by 4 */           \
     X(cw_sph4, sph_blocks, "sphere blocks")   /* the leaves of spheres only, 4 by 4 */             \

@@ -1651,7 +1651,7 @@ static void test_triangle_blocks(void **state)
                         assert_true(tri4_get(&sb->cy, l) == ds.sph[idx].center.y);
                         assert_true(tri4_get(&sb->cz, l) == ds.sph[idx].center.z);
                         assert_true(tri4_get(&sb->r, l) == ds.sph[idx].center.w);
-                        assert_int_equal(sb->material[l], ds.sph[idx].material);
+                        assert_int_equal(sb->material[l], ds.sph_mat[idx]);
                         seen[idx]++;
                         reached++;
                         lanes++;
