@@ -40,10 +40,10 @@ cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_mater
 {
     int cols = (f->nx + CW_PIX_TILE - 1) / CW_PIX_TILE, k;
     int jobs = cols * ((nrows + CW_PIX_TILE - 1) / CW_PIX_TILE);
-    pix_counts sum;
+    pix_state st;
     cw_world w;
     CW_MAKE_WORLD(w);
-    pix_clear(&sum);
+    pix_clear(&st);
     for (;;) {
         int job = atomic_inc(&counters[CW_COUNT_NEXT]), ty, y, y1, x, x0, x1;
         if (job >= jobs)
@@ -55,13 +55,13 @@ cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_mater
         for (y = ty * CW_PIX_TILE; y < y1; y++)
             for (x = x0; x < x1; x++)
                 pix_trace(&w, f, lights, materials, image, x, f->ny - 1 - (row0 + y), sx, sy, first,
-                          &sum);
+                          &st);
     }
     for (k = 0; k < CW_COUNT_DEPTH; k++)
-        if (pix_counted(k) && sum.n[k] != 0)
-            atomic_add(&counters[k], sum.n[k]);
-    if (sum.n[CW_COUNT_DEPTH] > 1)
-        atomic_max(&counters[CW_COUNT_DEPTH], sum.n[CW_COUNT_DEPTH]);
+        if (pix_counted(k) && st.n[k] != 0)
+            atomic_add(&counters[k], st.n[k]);
+    if (st.n[CW_COUNT_DEPTH] > 1)
+        atomic_max(&counters[CW_COUNT_DEPTH], st.n[CW_COUNT_DEPTH]);
 }
 
 #else
@@ -133,7 +133,9 @@ __kernel void cw_occlude(CW_WORLD_ARGS, __global const cw_shadow_ray *shadows,
     CW_MAKE_WORLD(w);
     for (i = gid; i < gid + block && i < n; i++) {
         cw_shadow_ray sr = shadows[i];
-        if (bvh_any(&w, sr.origin.xyz, sr.dir.xyz, 0.0f, sr.origin.w, sr.skip, sr.skip_inst)) {
+        bvh_occluder oc; /* no shadow cache: a work-item's shadow rays are one point's */
+        oc.tag = BVH_OCC_NONE;
+        if (bvh_any(&w, sr.origin.xyz, sr.dir.xyz, 0.0f, sr.origin.w, sr.skip, sr.skip_inst, &oc)) {
 #if CW_STATS
             atomic_inc(&counters[CW_COUNT_BLOCKED]);
 #endif

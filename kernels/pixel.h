@@ -41,18 +41,27 @@ typedef struct {
     int depth, skip, skip_inst;
 } pix_ray;
 
-/* What one pixel sample counted, indexed by CW_COUNT_*: secondary rays (CW_COUNT_RAYS),
- * shadow rays, and with CW_STATS hits and blocked shadow rays; CW_COUNT_DEPTH is the
- * deepest ray traced (a maximum, not a sum). */
+/* What a work-item carries from one pixel sample to the next: its counts, indexed by
+ * CW_COUNT_* (secondary rays (CW_COUNT_RAYS), shadow rays, and with CW_STATS hits and
+ * blocked shadow rays; CW_COUNT_DEPTH is the deepest ray traced, a maximum, not a sum), and
+ * its shadow cache: for each of the first PIX_OCC lights, the occluder that blocked its
+ * last shadow ray toward that light, if it was blocked (bvh_any). The pixels of a tile are
+ * neighbours, so a point in shadow is often shadowed by the same block as the point before
+ * (at 1024x1024, of the shadow rays the walk would have traced: gears 37% fewer nodes,
+ * balls 23%, 1M random triangles 11%, teapot 7%). */
+#define PIX_OCC 8
 typedef struct {
     int n[CW_COUNT_DEPTH + 1];
-} pix_counts;
+    bvh_occluder occ[PIX_OCC];
+} pix_state;
 
-CW_INLINE void pix_clear(pix_counts *c)
+CW_INLINE void pix_clear(pix_state *c)
 {
     int k;
     for (k = 0; k <= CW_COUNT_DEPTH; k++)
         c->n[k] = 0;
+    for (k = 0; k < PIX_OCC; k++)
+        c->occ[k].tag = c->occ[k].index = 0;
 }
 
 /* Whether counter k is counted in this build (the hits and blocked rays with CW_STATS). */
@@ -79,7 +88,7 @@ CW_INLINE pix_ray pix_make(vec3 o, vec3 d, vec3 weight, int depth, int skip, int
  * *nx to the ray's children (none on a miss or at the maximum depth). */
 CW_INLINE void pix_step(const cw_world *w, CW_GLOBAL const cw_frame *f,
                         CW_GLOBAL const cw_light *lights, CW_GLOBAL const cw_material *materials,
-                        const pix_ray *ray, vec3 *acc, vec3 *sum, shade_next *nx, pix_counts *c)
+                        const pix_ray *ray, vec3 *acc, vec3 *sum, shade_next *nx, pix_state *c)
 {
     shade_point pt;
     cw_hit hit;
@@ -102,11 +111,13 @@ CW_INLINE void pix_step(const cw_world *w, CW_GLOBAL const cw_frame *f,
     for (k = 0; k < f->num_lights; k++) {
         vec3 lp = v3_from4(lights[k].position), o, l;
         float tmax;
+        bvh_occluder spare, *oc = k < PIX_OCC ? &c->occ[k] : &spare; /* spare: no cache */
         if (!shade_faces(&pt, lp)) /* facing away: no contribution, no shadow ray */
             continue;
         c->n[CW_COUNT_SHADOWS]++;
         tmax = shade_shadow_ray(&pt, lp, &o, &l);
-        if (bvh_any(w, o, l, 0.0f, tmax, pt.s.flat, pt.s.inst)) {
+        spare.tag = BVH_OCC_NONE;
+        if (bvh_any(w, o, l, 0.0f, tmax, pt.s.flat, pt.s.inst, oc)) {
 #if CW_STATS
             c->n[CW_COUNT_BLOCKED]++;
 #endif
@@ -126,7 +137,7 @@ CW_INLINE void pix_step(const cw_world *w, CW_GLOBAL const cw_frame *f,
  * per level below the root's, plus one. */
 CW_INLINE void pix_subtree(const cw_world *w, CW_GLOBAL const cw_frame *f,
                            CW_GLOBAL const cw_light *lights, CW_GLOBAL const cw_material *materials,
-                           pix_ray root, vec3 *acc, pix_counts *c)
+                           pix_ray root, vec3 *acc, pix_state *c)
 {
     pix_ray stack[CW_PIX_STACK];
     int sp = 0;
@@ -151,8 +162,7 @@ CW_INLINE void pix_subtree(const cw_world *w, CW_GLOBAL const cw_frame *f,
  * ray, *count how many it holds), or walks its subtree at once when the queue is full. */
 CW_INLINE void pix_enqueue(const cw_world *w, CW_GLOBAL const cw_frame *f,
                            CW_GLOBAL const cw_light *lights, CW_GLOBAL const cw_material *materials,
-                           pix_ray *queue, int head, int *count, pix_ray r, vec3 *acc,
-                           pix_counts *c)
+                           pix_ray *queue, int head, int *count, pix_ray r, vec3 *acc, pix_state *c)
 {
 #if CW_HAS_REFRACTION
     if (*count == PIX_QUEUE) {
@@ -180,7 +190,7 @@ CW_INLINE void pix_enqueue(const cw_world *w, CW_GLOBAL const cw_frame *f,
 CW_INLINE void pix_trace(const cw_world *w, CW_GLOBAL const cw_frame *f,
                          CW_GLOBAL const cw_light *lights, CW_GLOBAL const cw_material *materials,
                          CW_GLOBAL float *image, int i, int j, float sx, float sy, int first,
-                         pix_counts *c)
+                         pix_state *c)
 {
     cw_ray eye = cam_ray(f, i, j, sx, sy);
     CW_GLOBAL float *px = &image[4 * eye.pixel];

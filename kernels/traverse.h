@@ -85,6 +85,21 @@ CW_INLINE int bvh_next(int *stack, float *stack_t, int *sp, const int *ci, const
     }
 }
 
+/* A shadow cache entry (Haines and Greenberg's light buffer, cut down to one occluder):
+ * what blocked the last shadow ray toward one light, a block of four triangles or spheres
+ * (tag BVH_OCC_TRI4 or _SPH4, index: the block) or a primitive (BVH_OCC_PRIM, index: its
+ * CW_REF), or nothing (BVH_OCC_NONE). bvh_any tests it before its walk. The answer does not
+ * change: the entry is tested with the walk's own primitive tests and skip, and a hit the
+ * primitive test finds is one the walk finds too (its box test is conservative on the robust
+ * path); the walk would only have found it, or another occluder, later. */
+#define BVH_OCC_NONE 0
+#define BVH_OCC_TRI4 1
+#define BVH_OCC_SPH4 2
+#define BVH_OCC_PRIM 3
+typedef struct {
+    int tag, index;
+} bvh_occluder;
+
 #if CW_HAS_TRIANGLES
 /* The nb blocks of four triangles from `first` (a leaf of triangles only), never the
  * triangle skip - 1, in order: on a hit closer than *t_best, records it in *hit and lowers
@@ -97,7 +112,7 @@ CW_INLINE void bvh_closest_blocks(const cw_world *w, int first, int nb, const cw
 }
 
 /* Whether the ray meets one of the nb blocks from `first` in (tmin, tmax), never the
- * triangle skip - 1. */
+ * triangle skip - 1: 0 if not, else 1 + the first block it meets. */
 CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri, float tmin,
                              float tmax, int skip)
 {
@@ -107,7 +122,7 @@ CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayi
         hit.kind = CW_PRIM_NONE;
         prim_tri4(w, k, ri, tmin, skip, &t_lim, &hit);
         if (hit.kind != CW_PRIM_NONE)
-            return 1;
+            return k + 1;
     }
     return 0;
 }
@@ -138,9 +153,9 @@ CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
 }
 
 /* Whether the ray meets a world leaf of blocks (count < -1) in (tmin, tmax), never the
- * triangle skip - 1. */
+ * triangle skip - 1: 0 if not, else the block it met, as a shadow cache entry in *oc. */
 CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const cw_rayinfo *ri,
-                                  float tmin, float tmax, int skip)
+                                  float tmin, float tmax, int skip, bvh_occluder *oc)
 {
     int code = -1 - count;
 #if CW_HAS_SPHERES
@@ -151,16 +166,27 @@ CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const
             cw_hit hit;
             hit.kind = CW_PRIM_NONE;
             prim_sph4(w, k, ri, tmin, &t_lim, &hit);
-            if (hit.kind != CW_PRIM_NONE)
+            if (hit.kind != CW_PRIM_NONE) {
+                oc->tag = BVH_OCC_SPH4;
+                oc->index = k;
                 return 1;
+            }
         }
         return 0;
     }
 #endif
 #if CW_HAS_TRIANGLES
-    return bvh_any_blocks(w, first, code, ri, tmin, tmax, skip);
+    {
+        int b = bvh_any_blocks(w, first, code, ri, tmin, tmax, skip);
+        if (b == 0)
+            return 0;
+        oc->tag = BVH_OCC_TRI4;
+        oc->index = b - 1;
+        return 1;
+    }
 #else
     (void)skip;
+    (void)oc;
     return 0;
 #endif
 }
@@ -337,10 +363,41 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
     }
 }
 
+/* Whether the ray meets the cached occluder *oc in (tmin, tmax), never the world's
+ * primitive skip - 1. */
+CW_INLINE int bvh_any_cached(const cw_world *w, const bvh_occluder *oc, const cw_rayinfo *ri,
+                             float tmin, float tmax, int skip)
+{
+    float t_lim = tmax;
+    cw_hit hit;
+    hit.kind = CW_PRIM_NONE;
+    switch (oc->tag) {
+#if CW_HAS_TRIANGLES
+    case BVH_OCC_TRI4:
+        prim_tri4(w, oc->index, ri, tmin, skip, &t_lim, &hit);
+        break;
+#endif
+#if CW_HAS_SPHERES
+    case BVH_OCC_SPH4:
+        prim_sph4(w, oc->index, ri, tmin, &t_lim, &hit);
+        break;
+#endif
+    case BVH_OCC_PRIM:
+        if (oc->index + 1 != skip)
+            prim_intersect(w, oc->index, ri, tmin, &t_lim, &hit);
+        break;
+    default:
+        break;
+    }
+    return hit.kind != CW_PRIM_NONE;
+}
+
 /* Any hit in (tmin, tmax), never the primitive skip - 1 of instance skip_inst - 1 (as in
- * bvh_closest): for shadow rays. */
+ * bvh_closest): for shadow rays. *oc is the shadow cache entry of the ray's light: tested
+ * first, then set to the occluder the walk meets, or to nothing when none blocks the ray
+ * (so that a lit point's next neighbour pays no test for it) or an instance does. */
 CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax, int skip,
-                      int skip_inst)
+                      int skip_inst, bvh_occluder *oc)
 {
     cw_rayinfo ri = isect_rayinfo(o, d);
     int stack[CW_BVH_STACK];
@@ -349,6 +406,8 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
 
     if (w->num_nodes == 0)
         return 0;
+    if (oc->tag != BVH_OCC_NONE && bvh_any_cached(w, oc, &ri, tmin, tmax, wskip))
+        return 1;
     stack[sp++] = 0;
     while (sp > 0) {
         CW_GLOBAL const cw_bvhw_node *nd;
@@ -368,7 +427,8 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
             }
             count = nd->count[i];
 #if CW_HAS_SPHERES || CW_HAS_TRIANGLES
-            if (count < -1 && bvh_any_leaf_blocks(w, nd->child[i], count, &ri, tmin, tmax, wskip))
+            if (count < -1 &&
+                bvh_any_leaf_blocks(w, nd->child[i], count, &ri, tmin, tmax, wskip, oc))
                 return 1;
 #endif
             for (k = nd->child[i]; k < nd->child[i] + count; k++) {
@@ -378,16 +438,22 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
                     int in = CW_REF_INDEX(ref);
                     cw_rayinfo mri = inst_ray(&w->instances[in], o, d);
                     if (bvh_mesh_any(w, w->instances[in].root, &mri, tmin, tmax,
-                                     in + 1 == skip_inst ? skip : 0))
+                                     in + 1 == skip_inst ? skip : 0)) {
+                        oc->tag = BVH_OCC_NONE;
                         return 1;
+                    }
                     continue;
                 }
 #endif
-                if (ref + 1 != wskip && bvh_any_prim(w, ref, &ri, tmin, tmax))
+                if (ref + 1 != wskip && bvh_any_prim(w, ref, &ri, tmin, tmax)) {
+                    oc->tag = BVH_OCC_PRIM;
+                    oc->index = ref;
                     return 1;
+                }
             }
         }
     }
+    oc->tag = BVH_OCC_NONE;
     return 0;
 }
 
