@@ -154,6 +154,11 @@ static void report(const cli_options *o, const image *img, const scene *s, const
                "(hit %llu)\n",
                st->eye_rays, st->eye_hits, st->shadow_rays, st->shadow_blocked, st->secondary_rays,
                st->secondary_hits);
+        {
+            char walk[256];
+            render_format_walk(st, walk, sizeof walk);
+            printf("%s\n", walk);
+        }
         printf("time: parse %.3f s, build %.3f s, compile %.3f s, upload %.3f s, trace %.3f s "
                "(%d passes), first launch %.3f s\n",
                t->loaded - t->start, st->build_s, st->compile_s, st->upload_s, st->trace_s,

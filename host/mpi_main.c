@@ -137,7 +137,7 @@ static int gather_setups(const job *j, const setup_report *mine)
 static void report(const job *j, const mwork_rank *all, double render_s, double total_s)
 {
     render_stats sum;
-    char rate[32], shown[1024];
+    char rate[32], shown[1024], walk[256];
     unsigned long long rays;
     int r;
     memset(&sum, 0, sizeof sum);
@@ -148,6 +148,10 @@ static void report(const job *j, const mwork_rank *all, double render_s, double 
         sum.shadow_blocked += all[r].st.shadow_blocked;
         sum.secondary_rays += all[r].st.secondary_rays;
         sum.secondary_hits += all[r].st.secondary_hits;
+        sum.closest_nodes += all[r].st.closest_nodes;
+        sum.closest_tests += all[r].st.closest_tests;
+        sum.any_nodes += all[r].st.any_nodes;
+        sum.any_tests += all[r].st.any_tests;
     }
     rays = sum.eye_rays + sum.shadow_rays + sum.secondary_rays;
     progress_format_rate(rate, sizeof rate, render_s > 0 ? (double)rays / render_s * 1e-6 : 0);
@@ -161,6 +165,8 @@ static void report(const job *j, const mwork_rank *all, double render_s, double 
     printf("rays: eye %llu (hit %llu), shadow %llu (blocked %llu), secondary %llu (hit %llu)\n",
            sum.eye_rays, sum.eye_hits, sum.shadow_rays, sum.shadow_blocked, sum.secondary_rays,
            sum.secondary_hits);
+    render_format_walk(&sum, walk, sizeof walk);
+    printf("%s\n", walk);
     for (r = 0; r < j->size; r++)
         printf("rank %d: %d tiles, set-up %.3f s, render %.3f s, %llu rays, %s\n", r, all[r].tiles,
                all[r].setup_s, all[r].render_s,

@@ -625,6 +625,21 @@ const char *render_strategy_name(int strategy)
     return strategy >= 0 && strategy < 3 ? strategy_names[strategy] : "auto";
 }
 
+static double per_ray(unsigned long long count, unsigned long long rays)
+{
+    return rays > 0 ? (double)count / (double)rays : 0.0;
+}
+
+void render_format_walk(const render_stats *st, char *buf, size_t n)
+{
+    unsigned long long closest = st->eye_rays + st->secondary_rays;
+    snprintf(buf, n,
+             "walk: closest-hit rays %.2f nodes, %.2f tests each; shadow rays %.2f nodes, "
+             "%.2f tests each (a block of four primitives: one test)",
+             per_ray(st->closest_nodes, closest), per_ray(st->closest_tests, closest),
+             per_ray(st->any_nodes, st->shadow_rays), per_ray(st->any_tests, st->shadow_rays));
+}
+
 int render_strategy_parse(const char *name)
 {
     int k;

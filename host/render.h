@@ -78,6 +78,10 @@ typedef struct {
     unsigned long long eye_rays, eye_hits;
     unsigned long long shadow_rays, shadow_blocked;
     unsigned long long secondary_rays, secondary_hits;
+    /* the BVH walks' work (settings.stats): nodes visited and primitive tests made (a block
+     * of four primitives is one test) by the closest-hit walks (eye and secondary rays) and by
+     * the shadow rays' any-hit walks (shadow cache tests included) */
+    unsigned long long closest_nodes, closest_tests, any_nodes, any_tests;
     double build_s;   /* acceleration structure build on the host */
     double compile_s; /* kernel program build (0 when the program was already built) */
     double warmup_s;  /* renderer_render's first launch on one row, before the clock of
@@ -97,6 +101,10 @@ typedef struct {
      * BVH's nodes (both levels) */
     int spheres, triangles, polygons, cones, instances, meshes, nodes;
 } render_stats;
+
+/* The --stats line of the BVH walks' work, from st: per closest-hit ray (eye and secondary)
+ * and per shadow ray, the nodes visited and the primitive tests made. */
+void render_format_walk(const render_stats *st, char *buf, size_t n);
 void renderer_get_stats(const renderer *r, render_stats *st);
 
 /* Progress callback: called during renderer_render after each batch of work with the

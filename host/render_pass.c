@@ -414,7 +414,8 @@ static unsigned long long total_rays(const render_stats *st)
     return st->eye_rays + st->shadow_rays + st->secondary_rays;
 }
 
-/* Adds a launch's --stats counts (the hits and the blocked shadow rays) to the totals. */
+/* Adds a launch's --stats counts (the hits, the blocked shadow rays and the walks' work) to
+ * the totals. */
 static void add_stat_counts(renderer *r, const cl_int *counts)
 {
     if (!r->settings.stats)
@@ -422,6 +423,11 @@ static void add_stat_counts(renderer *r, const cl_int *counts)
     r->stats.eye_hits += (unsigned long long)counts[CW_COUNT_EYE_HITS];
     r->stats.secondary_hits += (unsigned long long)counts[CW_COUNT_SECONDARY_HITS];
     r->stats.shadow_blocked += (unsigned long long)counts[CW_COUNT_BLOCKED];
+    /* a launch's walk counts may pass 2^31: the kernels' int adds wrap as unsigned ones */
+    r->stats.closest_nodes += (cl_uint)counts[CW_COUNT_CLOSEST_NODES];
+    r->stats.closest_tests += (cl_uint)counts[CW_COUNT_CLOSEST_TESTS];
+    r->stats.any_nodes += (cl_uint)counts[CW_COUNT_ANY_NODES];
+    r->stats.any_tests += (cl_uint)counts[CW_COUNT_ANY_TESTS];
 }
 
 /* Reports the fraction done to the progress callback. Returns 0, or -1 with "render

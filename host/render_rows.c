@@ -102,6 +102,7 @@ void renderer_reset_trace_stats(renderer *r)
     r->stats.eye_rays = r->stats.eye_hits = 0;
     r->stats.shadow_rays = r->stats.shadow_blocked = 0;
     r->stats.secondary_rays = r->stats.secondary_hits = 0;
+    r->stats.closest_nodes = r->stats.closest_tests = r->stats.any_nodes = r->stats.any_tests = 0;
     r->stats.passes = 0;
     r->stats.raygen_s = r->stats.intersect_s = r->stats.shade_s = r->stats.occlude_s = 0;
     r->stats.pixel_s = 0;

@@ -42,7 +42,8 @@ cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_mater
     int jobs = cols * ((nrows + CW_PIX_TILE - 1) / CW_PIX_TILE);
     pix_state st;
     cw_world w;
-    CW_MAKE_WORLD(w);
+    int walk[CW_WALK_COUNTS];
+    CW_MAKE_WORLD(w, walk);
     pix_clear(&st);
     for (;;) {
         int job = atomic_inc(&counters[CW_COUNT_NEXT]), ty, y, y1, x, x0, x1;
@@ -62,6 +63,11 @@ cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_mater
             atomic_add(&counters[k], st.n[k]);
     if (st.n[CW_COUNT_DEPTH] > 1)
         atomic_max(&counters[CW_COUNT_DEPTH], st.n[CW_COUNT_DEPTH]);
+#if CW_STATS
+    for (k = 0; k < CW_WALK_COUNTS; k++)
+        if (walk[k] != 0)
+            atomic_add(&counters[CW_COUNT_CLOSEST_NODES + k], walk[k]);
+#endif
 }
 
 #else
@@ -89,15 +95,18 @@ __kernel void cw_intersect(CW_WORLD_ARGS, __global const cw_ray *rays, __global 
     cw_world w;
     cw_ray ray;
     cw_hit hit;
+    int walk[CW_WALK_COUNTS];
     if (gid >= n)
         return;
     ray = rays[gid];
-    CW_MAKE_WORLD(w);
+    CW_MAKE_WORLD(w, walk);
     bvh_closest(&w, ray.origin.xyz, ray.dir.xyz, 0.0f, CW_FAR, ray.skip, ray.skip_inst, &hit);
     hits[gid] = hit;
 #if CW_STATS
     if (hit.kind != CW_PRIM_NONE)
         atomic_inc(&counters[ray.depth == 1 ? CW_COUNT_EYE_HITS : CW_COUNT_SECONDARY_HITS]);
+    atomic_add(&counters[CW_COUNT_CLOSEST_NODES], walk[0]);
+    atomic_add(&counters[CW_COUNT_CLOSEST_TESTS], walk[1]);
 #else
     (void)counters;
 #endif
@@ -111,10 +120,11 @@ __kernel void cw_shade(CW_WORLD_ARGS, __global const cw_light *lights,
     int gid = (int)get_global_id(0);
     cw_world w;
     cw_ray ray;
+    int walk[CW_WALK_COUNTS]; /* no walk here */
     if (gid >= n)
         return;
     ray = rays[gid];
-    CW_MAKE_WORLD(w);
+    CW_MAKE_WORLD(w, walk);
     wave_shade(&w, f, lights, materials, &ray, hits[gid], image, out, shadows, counters);
 }
 
@@ -128,9 +138,10 @@ __kernel void cw_occlude(CW_WORLD_ARGS, __global const cw_shadow_ray *shadows,
     int gid = (int)get_global_id(0), i, block;
     cw_world w;
     float3 sum = (float3)(0.0f, 0.0f, 0.0f);
+    int walk[CW_WALK_COUNTS];
     if (gid >= n || (block = shadows[gid].block) == 0)
         return;
-    CW_MAKE_WORLD(w);
+    CW_MAKE_WORLD(w, walk);
     for (i = gid; i < gid + block && i < n; i++) {
         cw_shadow_ray sr = shadows[i];
         bvh_occluder oc; /* no shadow cache: a work-item's shadow rays are one point's */
@@ -144,6 +155,10 @@ __kernel void cw_occlude(CW_WORLD_ARGS, __global const cw_shadow_ray *shadows,
         sum += sr.color.xyz;
     }
     wave_add_local(image, shadows[gid].pixel, sum);
+#if CW_STATS
+    atomic_add(&counters[CW_COUNT_ANY_NODES], walk[2]);
+    atomic_add(&counters[CW_COUNT_ANY_TESTS], walk[3]);
+#endif
     (void)counters;
 }
 

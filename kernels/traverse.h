@@ -15,6 +15,14 @@
 #include "vecmath.h"
 #include "world.h"
 
+/* With CW_STATS, adds n to the walk count k (CW_COUNT_CLOSEST_NODES .. CW_COUNT_ANY_TESTS)
+ * of w; nothing otherwise. */
+#if CW_STATS
+#define BVH_COUNT(w, k, n) ((w)->walk[(k)-CW_COUNT_CLOSEST_NODES] += (n))
+#else
+#define BVH_COUNT(w, k, n) ((void)0)
+#endif
+
 /* The child boxes of a node against [tmin, tmax] at once: the lanes a ray enters, as a bit
  * mask, and each lane's entry distance in enter[]. Each plane's distance is (o - b) * (-1/d)
  * (ri->ninv), which is (b - o) / d to the bit and lets the compiler read the node's planes
@@ -107,6 +115,7 @@ typedef struct {
 CW_INLINE void bvh_closest_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri,
                                   float tmin, int skip, float *t_best, cw_hit *hit)
 {
+    BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, nb);
     for (int k = first; k < first + nb; k++)
         prim_tri4(w, k, ri, tmin, skip, t_best, hit);
 }
@@ -119,6 +128,7 @@ CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayi
     for (int k = first; k < first + nb; k++) {
         float t_lim = tmax;
         cw_hit hit;
+        BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
         hit.kind = CW_PRIM_NONE;
         prim_tri4(w, k, ri, tmin, skip, &t_lim, &hit);
         if (hit.kind != CW_PRIM_NONE)
@@ -140,6 +150,7 @@ CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
 #if CW_HAS_SPHERES
     if (code & CW_LEAF_SPHERES) {
         int nb = code & (CW_LEAF_SPHERES - 1);
+        BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, nb);
         for (int k = first; k < first + nb; k++)
             prim_sph4(w, k, ri, tmin, t_best, hit);
         return;
@@ -164,6 +175,7 @@ CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const
         for (int k = first; k < first + nb; k++) {
             float t_lim = tmax;
             cw_hit hit;
+            BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
             hit.kind = CW_PRIM_NONE;
             prim_sph4(w, k, ri, tmin, &t_lim, &hit);
             if (hit.kind != CW_PRIM_NONE) {
@@ -197,6 +209,7 @@ CW_INLINE int bvh_any_prim(const cw_world *w, int ref, const cw_rayinfo *ri, flo
 {
     float t_lim = tmax;
     cw_hit hit;
+    BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
     hit.kind = CW_PRIM_NONE;
     prim_intersect(w, ref, ri, tmin, &t_lim, &hit);
     return hit.kind != CW_PRIM_NONE;
@@ -219,6 +232,7 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
         float ct[CW_BVH_WIDTH], enter[CW_BVH_WIDTH];
         unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, ri, tmin, *t_best, enter);
+        BVH_COUNT(w, CW_COUNT_CLOSEST_NODES, 1);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);
@@ -231,8 +245,10 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
             if (count > 0) {
                 for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                     int ref = w->refs[k];
-                    if (ref + 1 != skip)
+                    if (ref + 1 != skip) {
+                        BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, 1);
                         prim_intersect(w, ref, ri, tmin, t_best, hit);
+                    }
                 }
             } else if (count < -1) {
                 bvh_closest_blocks(w, nd->child[i], -1 - count, ri, tmin, skip, t_best, hit);
@@ -257,6 +273,7 @@ CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, fl
         float enter[CW_BVH_WIDTH];
         unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, ri, tmin, tmax, enter);
+        BVH_COUNT(w, CW_COUNT_ANY_NODES, 1);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);
@@ -325,6 +342,7 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
         float ct[CW_BVH_WIDTH], enter[CW_BVH_WIDTH];
         unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, &ri, tmin, t_best, enter);
+        BVH_COUNT(w, CW_COUNT_CLOSEST_NODES, 1);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);
@@ -345,8 +363,10 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
                         continue;
                     }
 #endif
-                    if (ref + 1 != wskip)
+                    if (ref + 1 != wskip) {
+                        BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, 1);
                         prim_intersect(w, ref, &ri, tmin, &t_best, &hit);
+                    }
                 }
 #if CW_HAS_SPHERES || CW_HAS_TRIANGLES
             } else if (count < -1) { /* blocks of four spheres or triangles */
@@ -370,6 +390,7 @@ CW_INLINE int bvh_any_cached(const cw_world *w, const bvh_occluder *oc, const cw
 {
     float t_lim = tmax;
     cw_hit hit;
+    BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
     hit.kind = CW_PRIM_NONE;
     switch (oc->tag) {
 #if CW_HAS_TRIANGLES
@@ -417,6 +438,7 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
         nd = &w->nodes[node];
         inner = vl_zero_mask(nd->count);
         mask = bvh_boxes(nd, &ri, tmin, tmax, enter);
+        BVH_COUNT(w, CW_COUNT_ANY_NODES, 1);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);

@@ -216,7 +216,14 @@ typedef struct {
 #define CW_COUNT_BLOCKED 4
 #define CW_COUNT_DEPTH 5 /* per-pixel kernel: the deepest ray traced (the wavefront's levels) */
 #define CW_COUNT_NEXT 6  /* per-pixel kernel: the next run of pixels to hand out */
-#define CW_NUM_COUNTERS 8
+/* With CW_STATS, the work of the BVH walks (traverse.h): the nodes the closest-hit walks
+ * visit and the primitive tests they make (a block of four: one test), then the same for
+ * the shadow rays' any-hit walks (a shadow cache test included). */
+#define CW_COUNT_CLOSEST_NODES 7
+#define CW_COUNT_CLOSEST_TESTS 8
+#define CW_COUNT_ANY_NODES 9
+#define CW_COUNT_ANY_TESTS 10
+#define CW_NUM_COUNTERS 12
 
 typedef struct {
     float t;    /* ray parameter of the closest hit */

@@ -7,6 +7,7 @@
 #ifndef CW_WORLD_H
 #define CW_WORLD_H
 
+#include "flags.h"
 #include "types.h"
 
 /* X(element type, name, what): one line per buffer; `what` names it in messages. */
@@ -31,6 +32,9 @@ typedef struct {
     CW_WORLD_BUFFERS(CW_WORLD_FIELD)
 #undef CW_WORLD_FIELD
     int num_nodes; /* from the frame: 0 for an empty scene */
+#if CW_STATS
+    int *walk; /* the work-item's walk counts (CW_WALK_COUNTS from CW_COUNT_CLOSEST_NODES) */
+#endif
 } cw_world;
 
 /* Kernel argument indices: the frame first, then each buffer; kernels that take the world
@@ -43,12 +47,25 @@ enum cw_world_arg { CW_WORLD_ARG_frame, CW_WORLD_BUFFERS(CW_WORLD_INDEX) CW_WORL
 #define CW_WORLD_PARAM(type, name, what) , CW_GLOBAL const type *name
 #define CW_WORLD_ARGS CW_GLOBAL const cw_frame *f CW_WORLD_BUFFERS(CW_WORLD_PARAM)
 
-/* Binds the parameters of CW_WORLD_ARGS into the cw_world w. */
+/* Binds the parameters of CW_WORLD_ARGS into the cw_world w; with CW_STATS, its walk
+ * counts are the int array walk[CW_WALK_COUNTS] (zeroed here). */
 #define CW_WORLD_BIND(type, name, what) (w).name = name;
-#define CW_MAKE_WORLD(w)                                                                           \
+#define CW_WALK_COUNTS 4
+#if CW_STATS
+#define CW_WORLD_WALK(w, walk)                                                                     \
+    do {                                                                                           \
+        for (int walk_k = 0; walk_k < CW_WALK_COUNTS; walk_k++)                                    \
+            (walk)[walk_k] = 0;                                                                    \
+        (w).walk = (walk);                                                                         \
+    } while (0)
+#else
+#define CW_WORLD_WALK(w, walk) ((void)(walk))
+#endif
+#define CW_MAKE_WORLD(w, walk)                                                                     \
     do {                                                                                           \
         CW_WORLD_BUFFERS(CW_WORLD_BIND)                                                            \
         (w).num_nodes = f->num_nodes;                                                              \
+        CW_WORLD_WALK(w, walk);                                                                    \
     } while (0)
 
 #endif

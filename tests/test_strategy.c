@@ -234,10 +234,20 @@ static int compare_values(const image *a, const image *b, int tolerant, double t
         same = 0;                                                                                  \
     }
 
-/* The counts of a and b agree: equal, or within tol of their size. */
+/* The counts of a (the wavefront's) and b (the per-pixel kernel's) agree: equal, or within
+ * tol of their size. Both walk the same tree for the same closest-hit rays; their shadow
+ * rays too, but the per-pixel kernel skips the walk of a shadow ray its shadow cache
+ * answers, so it visits no more nodes. */
 static int same_counts(const render_stats *a, const render_stats *b, double tol)
 {
     int same = 1;
+    SAME_COUNT(closest_nodes)
+    SAME_COUNT(closest_tests)
+    if ((double)b->any_nodes > (1.0 + tol) * (double)a->any_nodes) {
+        fprintf(stderr, "  any_nodes: wavefront %llu, pixel %llu (more)\n", a->any_nodes,
+                b->any_nodes);
+        same = 0;
+    }
     SAME_COUNT(eye_rays)
     SAME_COUNT(eye_hits)
     SAME_COUNT(shadow_rays)

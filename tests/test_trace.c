@@ -1621,6 +1621,16 @@ static void test_stats(void **state)
     check_counts(&st, &k, "one sphere");
     assert_true(k.hits > 0 && k.shadow > 0 && k.shadow < k.hits && k.blocked == 0);
     assert_int_equal(st.passes, 1);
+    /* the walks' work in a tree of one node: every ray visits it; a ray that hits the
+     * sphere has tested it, and no ray tests it more than once; no shadow ray is blocked,
+     * so no shadow cache entry spares a walk */
+    printf("  walk: closest %llu nodes, %llu tests; shadow %llu nodes, %llu tests\n",
+           st.closest_nodes, st.closest_tests, st.any_nodes, st.any_tests);
+    assert_int_equal(st.nodes, 1);
+    assert_true(st.closest_nodes == st.eye_rays);
+    assert_true(st.closest_tests >= st.eye_hits && st.closest_tests <= st.eye_rays);
+    assert_true(st.any_nodes == st.shadow_rays);
+    assert_true(st.any_tests <= st.shadow_rays);
     image_free(&img);
     scene_free(&s);
 
@@ -1631,6 +1641,14 @@ static void test_stats(void **state)
     k = expected_counts(1, STATS_NX, STATS_NY, -2, 2, -1.5, 1.5);
     check_counts(&st, &k, "with an occluder");
     assert_true(k.blocked > 0);
+    /* a blocked shadow ray has tested its occluder; a walk the shadow cache spares visits
+     * no node, and only a blocked ray's can be spared */
+    printf("  walk: closest %llu nodes, %llu tests; shadow %llu nodes, %llu tests\n",
+           st.closest_nodes, st.closest_tests, st.any_nodes, st.any_tests);
+    assert_true(st.closest_nodes >= st.eye_rays && st.closest_tests >= st.eye_hits);
+    assert_true(st.any_tests >= st.shadow_blocked);
+    assert_true(st.any_nodes <= st.shadow_rays &&
+                st.any_nodes >= st.shadow_rays - st.shadow_blocked);
     image_free(&img);
     scene_free(&s);
 }
