@@ -62,7 +62,7 @@ CW_INLINE void pix_clear(pix_state *c)
     for (k = 0; k <= CW_COUNT_DEPTH; k++)
         c->n[k] = 0;
     for (k = 0; k < PIX_OCC; k++)
-        c->occ[0][k].tag = c->occ[0][k].index = c->occ[1][k].tag = c->occ[1][k].index = 0;
+        c->occ[0][k].tag = c->occ[1][k].tag = BVH_OCC_NONE;
 }
 
 /* Whether counter k is counted in this build (the hits and blocked rays with CW_STATS). */

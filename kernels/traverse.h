@@ -163,6 +163,19 @@ CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
 #endif
 }
 
+#if CW_HAS_SPHERES
+/* Whether the ray meets one of the four spheres of block k in (tmin, tmax). */
+CW_INLINE int bvh_any_sph4(const cw_world *w, int k, const cw_rayinfo *ri, float tmin, float tmax)
+{
+    float t_lim = tmax;
+    cw_hit hit;
+    BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
+    hit.kind = CW_PRIM_NONE;
+    prim_sph4(w, k, ri, tmin, &t_lim, &hit);
+    return hit.kind != CW_PRIM_NONE;
+}
+#endif
+
 /* Whether the ray meets a world leaf of blocks (count < -1) in (tmin, tmax), never the
  * triangle skip - 1: 0 if not, else the block it met, as a shadow cache entry in *oc. */
 CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const cw_rayinfo *ri,
@@ -173,12 +186,7 @@ CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const
     if (code & CW_LEAF_SPHERES) {
         int nb = code & (CW_LEAF_SPHERES - 1);
         for (int k = first; k < first + nb; k++) {
-            float t_lim = tmax;
-            cw_hit hit;
-            BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
-            hit.kind = CW_PRIM_NONE;
-            prim_sph4(w, k, ri, tmin, &t_lim, &hit);
-            if (hit.kind != CW_PRIM_NONE) {
+            if (bvh_any_sph4(w, k, ri, tmin, tmax)) {
                 oc->tag = BVH_OCC_SPH4;
                 oc->index = k;
                 return 1;
@@ -384,33 +392,24 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
 }
 
 /* Whether the ray meets the cached occluder *oc in (tmin, tmax), never the world's
- * primitive skip - 1. */
+ * primitive skip - 1: the walk's own leaf tests. */
 CW_INLINE int bvh_any_cached(const cw_world *w, const bvh_occluder *oc, const cw_rayinfo *ri,
                              float tmin, float tmax, int skip)
 {
-    float t_lim = tmax;
-    cw_hit hit;
-    BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
-    hit.kind = CW_PRIM_NONE;
     switch (oc->tag) {
 #if CW_HAS_TRIANGLES
     case BVH_OCC_TRI4:
-        prim_tri4(w, oc->index, ri, tmin, skip, &t_lim, &hit);
-        break;
+        return bvh_any_blocks(w, oc->index, 1, ri, tmin, tmax, skip) != 0;
 #endif
 #if CW_HAS_SPHERES
     case BVH_OCC_SPH4:
-        prim_sph4(w, oc->index, ri, tmin, &t_lim, &hit);
-        break;
+        return bvh_any_sph4(w, oc->index, ri, tmin, tmax);
 #endif
     case BVH_OCC_PRIM:
-        if (oc->index + 1 != skip)
-            prim_intersect(w, oc->index, ri, tmin, &t_lim, &hit);
-        break;
+        return oc->index + 1 != skip && bvh_any_prim(w, oc->index, ri, tmin, tmax);
     default:
-        break;
+        return 0;
     }
-    return hit.kind != CW_PRIM_NONE;
 }
 
 /* Any hit in (tmin, tmax), never the primitive skip - 1 of instance skip_inst - 1 (as in
