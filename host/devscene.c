@@ -545,8 +545,8 @@ static int pack_leaves(devscene *ds, char *err, size_t errlen)
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
 {
     int i, rc;
-    /* triangles (class 1) and spheres (class 2) are tested four at a time in a leaf of one
-     * kind only (pack_leaves) */
+    /* triangles (class 1) and spheres (class 2) are kept in blocks of four in a leaf of one
+     * kind only (pack_leaves) and tested BVH_BLOCK_TEST at a time */
     unsigned char *blocks = malloc(ds->nbox > 0 ? (size_t)ds->nbox : 1);
     if (!blocks) {
         snprintf(err, errlen, "out of memory for the BVH");
@@ -557,8 +557,8 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
                     : CW_REF_KIND(ds->box_ref[i]) == CW_PRIM_SPHERE ? 2
                                                                     : 0;
     /* the builder frees the boxes once it has its own copy */
-    rc = bvh_build_blocks_take(&ds->tree, &ds->boxes, blocks, ds->nbox, 4, CW_BVH_THREADS, err,
-                               errlen);
+    rc = bvh_build_blocks_take(&ds->tree, &ds->boxes, blocks, ds->nbox, BVH_BLOCK_TEST,
+                               CW_BVH_THREADS, err, errlen);
     free(blocks);
     if (rc != 0)
         return -1;

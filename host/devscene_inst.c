@@ -230,7 +230,7 @@ int devinst_build(devscene *ds, char *err, size_t errlen)
         if (dm->count == 0)
             continue;
         memset(&t, 0, sizeof t);
-        if (bvh_build_blocks(&b, ds->mesh_boxes + dm->box_first, blocks, dm->count, 4,
+        if (bvh_build_blocks(&b, ds->mesh_boxes + dm->box_first, blocks, dm->count, BVH_BLOCK_TEST,
                              CW_BVH_THREADS, err, errlen) != 0) {
             free(blocks);
             return -1;

@@ -635,7 +635,7 @@ void render_format_walk(const render_stats *st, char *buf, size_t n)
     unsigned long long closest = st->eye_rays + st->secondary_rays;
     snprintf(buf, n,
              "walk: closest-hit rays %.2f nodes, %.2f tests each; shadow rays %.2f nodes, "
-             "%.2f tests each (a block of four primitives: one test)",
+             "%.2f tests each (one or two blocks of four primitives: one test)",
              per_ray(st->closest_nodes, closest), per_ray(st->closest_tests, closest),
              per_ray(st->any_nodes, st->shadow_rays), per_ray(st->any_tests, st->shadow_rays));
 }

@@ -1,10 +1,10 @@
 /* What differs between OpenCL C 1.2 and host C99, and nothing else: the address-space
  * and inline keywords (CW_GLOBAL, CW_INLINE, CW_FORCE_INLINE), the vector types
- * (cw_float4, cw_int4, vec3, cw_lanes), the math functions (cw_sqrt ...) and bit casts (cw_as_int),
- * the bit scan cw_ctz, the atomics and the contraction pragma. The kernel headers are written with
- * these so that they compile both as OpenCL C (the kernels) and as host C99 (host code and tests).
- * OpenCL C appears elsewhere only in the OpenCL branch of vecmath.h (vector operators and
- * built-ins) and in the entry kernels of clwhitted.cl (__kernel, __global, __local, work-item
+ * (cw_float4, cw_float8, cw_int8, vec3, cw_lanes), the math functions (cw_sqrt ...) and bit casts
+ * (cw_as_int), the bit scan cw_ctz, the atomics and the contraction pragma. The kernel headers are
+ * written with these so that they compile both as OpenCL C (the kernels) and as host C99 (host code
+ * and tests). OpenCL C appears elsewhere only in the OpenCL branch of vecmath.h (vector operators
+ * and built-ins) and in the entry kernels of clwhitted.cl (__kernel, __global, __local, work-item
  * functions and barriers), which the host never compiles. */
 #ifndef CW_COMPAT_H
 #define CW_COMPAT_H
@@ -27,7 +27,9 @@
 #define CW_FORCE_INLINE static inline __attribute__((always_inline))
 
 typedef float4 cw_float4;
-typedef int4 cw_int4; /* a lane mask of four: -1 true, 0 false */
+/* the eight lanes of one test of two blocks of primitives (cw_tri4, cw_sph4) */
+typedef float8 cw_float8;
+typedef int8 cw_int8; /* a lane mask of eight: -1 true, 0 false */
 typedef float3 vec3;
 /* the lanes of one box test of the wide BVH */
 #if CW_BVH_WIDTH == 8
@@ -87,8 +89,12 @@ typedef struct {
 } __attribute__((aligned(16))) cw_float4;
 
 typedef struct {
-    int x, y, z, w;
-} cw_int4;
+    float v[8];
+} __attribute__((aligned(32))) cw_float8;
+
+typedef struct {
+    int v[8];
+} cw_int8;
 
 typedef struct {
     float x, y, z;

@@ -63,48 +63,52 @@ CW_FORCE_INLINE void prim_intersect(const cw_world *w, int ref, const cw_rayinfo
 }
 
 #if CW_HAS_TRIANGLES
-/* Tests the ray against the four triangles of block `block` (a leaf of triangles only,
- * cw_tri4), never the primitive skip - 1; on a hit closer than *tmax, records it in *hit
- * and lowers *tmax: what prim_intersect does for each of them in lane order. */
-CW_FORCE_INLINE void prim_tri4(const cw_world *w, int block, const cw_rayinfo *ri, float tmin,
-                               int skip, float *tmax, cw_hit *hit)
+/* Tests the ray against the triangles of block `block` and, where two is set, of the next
+ * block too, in one test (a leaf of triangles only, cw_tri4), never the primitive skip - 1;
+ * on a hit closer than *tmax, records it in *hit (its block and lane there) and lowers
+ * *tmax: what prim_intersect does for each of them in lane order. */
+CW_FORCE_INLINE void prim_tri8(const cw_world *w, int block, int two, const cw_rayinfo *ri,
+                               float tmin, int skip, float *tmax, cw_hit *hit)
 {
-    CW_GLOBAL const cw_tri4 *b = &w->tri_blocks[block];
+    CW_GLOBAL const cw_tri4 *b0 = &w->tri_blocks[block];
+    CW_GLOBAL const cw_tri4 *b1 = two ? b0 + 1 : b0;
     float t = 0.0f, u = 0.0f, v = 0.0f;
-    int lane = isect_tri4(b, ri, tmin, *tmax, skip, &t, &u, &v);
+    int lane = isect_tri8(b0, b1, two ? 255u : 15u, ri, tmin, *tmax, skip, &t, &u, &v);
     if (lane >= 0) {
         *tmax = t;
         hit->t = t;
         hit->u = u;
         hit->v = v;
         hit->kind = CW_PRIM_TRIANGLE;
-        hit->index = b->index[lane];
+        hit->index = (lane < 4 ? b0 : b1)->index[lane & 3];
         hit->inst = 0;
-        hit->block = block + 1;
-        hit->lane = lane;
+        hit->block = block + (lane >> 2) + 1;
+        hit->lane = lane & 3;
     }
 }
 #endif
 
 #if CW_HAS_SPHERES
-/* The four spheres of block `block` (a leaf of spheres only): on a hit closer than *tmax,
- * records it in *hit and lowers *tmax. */
-CW_FORCE_INLINE void prim_sph4(const cw_world *w, int block, const cw_rayinfo *ri, float tmin,
-                               float *tmax, cw_hit *hit)
+/* The spheres of block `block` and, where two is set, of the next block too, in one test (a
+ * leaf of spheres only, cw_sph4): on a hit closer than *tmax, records it in *hit and lowers
+ * *tmax. */
+CW_FORCE_INLINE void prim_sph8(const cw_world *w, int block, int two, const cw_rayinfo *ri,
+                               float tmin, float *tmax, cw_hit *hit)
 {
-    CW_GLOBAL const cw_sph4 *b = &w->sph_blocks[block];
+    CW_GLOBAL const cw_sph4 *b0 = &w->sph_blocks[block];
+    CW_GLOBAL const cw_sph4 *b1 = two ? b0 + 1 : b0;
     float t = 0.0f;
-    int lane = isect_sph4(b, ri->o, ri->d, tmin, *tmax, &t);
+    int lane = isect_sph8(b0, b1, two ? 255u : 15u, ri->o, ri->d, tmin, *tmax, &t);
     if (lane >= 0) {
         *tmax = t;
         hit->t = t;
         hit->u = 0.0f;
         hit->v = 0.0f;
         hit->kind = CW_PRIM_SPHERE;
-        hit->index = b->index[lane];
+        hit->index = (lane < 4 ? b0 : b1)->index[lane & 3];
         hit->inst = 0;
-        hit->block = block + 1;
-        hit->lane = lane;
+        hit->block = block + (lane >> 2) + 1;
+        hit->lane = lane & 3;
     }
 }
 #endif

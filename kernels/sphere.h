@@ -24,7 +24,7 @@ CW_INLINE int isect_sphere(CW_GLOBAL const cw_sphere *s, vec3 o, vec3 d, float t
                            float *t_out)
 {
     float r = s->center.w; /* < 0: visible from inside only */
-    /* the dot products written out, in isect_sph4's order (a library dot may fuse) */
+    /* the dot products written out, in isect_sph8's order (a library dot may fuse) */
     float fx = o.x - s->center.x, fy = o.y - s->center.y, fz = o.z - s->center.z;
     float b = fx * d.x + fy * d.y + fz * d.z;
     float px = fx - d.x * b, py = fy - d.y * b, pz = fz - d.z * b;
@@ -54,50 +54,52 @@ CW_INLINE int isect_sphere(CW_GLOBAL const cw_sphere *s, vec3 o, vec3 d, float t
     return 0;
 }
 
-/* The four spheres of block b at once, each lane with exactly isect_sphere's float
- * operations (the same hits, bit for bit): the closest hit in (tmin, tmax). Returns its
+/* The spheres of blocks b0 and b1 at once, lanes 0-3 and 4-7, of the lanes set in `lanes`
+ * (15: b0 only, b1 = b0; 255: both), each lane with exactly isect_sphere's float operations
+ * (the same hits, bit for bit): the closest hit in (tmin, tmax). Returns its
  * lane, the first of equally close ones (as testing them one by one in lane order), or -1.
  * Each lane's hit is the one isect_sphere finds below tmax; testing them in order with
  * the lowered tmax keeps a lane's hit exactly when it is below the current tmax, since
  * its far root can only count where the near one does not. */
-CW_INLINE int isect_sph4(CW_GLOBAL const cw_sph4 *b, vec3 o, vec3 d, float tmin, float tmax,
-                         float *t_out)
+CW_INLINE int isect_sph8(CW_GLOBAL const cw_sph4 *b0, CW_GLOBAL const cw_sph4 *b1, unsigned lanes,
+                         vec3 o, vec3 d, float tmin, float tmax, float *t_out)
 {
-    cw_float4 zero = v4_splat(0.0f), r = b->r;
-    cw_float4 dx = v4_splat(d.x), dy = v4_splat(d.y), dz = v4_splat(d.z);
-    cw_float4 fx = v4_sub(v4_splat(o.x), b->cx), fy = v4_sub(v4_splat(o.y), b->cy);
-    cw_float4 fz = v4_sub(v4_splat(o.z), b->cz);
-    cw_float4 bb = v4_add(v4_add(v4_mul(fx, dx), v4_mul(fy, dy)), v4_mul(fz, dz));
-    cw_float4 px = v4_sub(fx, v4_mul(dx, bb)), py = v4_sub(fy, v4_mul(dy, bb));
-    cw_float4 pz = v4_sub(fz, v4_mul(dz, bb));
-    cw_float4 rr = v4_mul(r, r);
-    cw_float4 disc = v4_sub(rr, v4_add(v4_add(v4_mul(px, px), v4_mul(py, py)), v4_mul(pz, pz)));
-    cw_float4 cc, q, t0, t1, lo, hi, t;
-    cw_int4 swap, near, far;
-    float lt[4];
-    unsigned m = ~m4_bits(v4_lt(disc, zero)) & 15u; /* isect_sphere's disc < 0: a miss */
+    cw_float8 zero = v8_splat(0.0f), r = v8_pair(b0->r, b1->r);
+    cw_float8 dx = v8_splat(d.x), dy = v8_splat(d.y), dz = v8_splat(d.z);
+    cw_float8 fx = v8_sub(v8_splat(o.x), v8_pair(b0->cx, b1->cx)),
+              fy = v8_sub(v8_splat(o.y), v8_pair(b0->cy, b1->cy));
+    cw_float8 fz = v8_sub(v8_splat(o.z), v8_pair(b0->cz, b1->cz));
+    cw_float8 bb = v8_add(v8_add(v8_mul(fx, dx), v8_mul(fy, dy)), v8_mul(fz, dz));
+    cw_float8 px = v8_sub(fx, v8_mul(dx, bb)), py = v8_sub(fy, v8_mul(dy, bb));
+    cw_float8 pz = v8_sub(fz, v8_mul(dz, bb));
+    cw_float8 rr = v8_mul(r, r);
+    cw_float8 disc = v8_sub(rr, v8_add(v8_add(v8_mul(px, px), v8_mul(py, py)), v8_mul(pz, pz)));
+    cw_float8 cc, q, t0, t1, lo, hi, t;
+    cw_int8 swap, near, far;
+    float lt[8];
+    unsigned m = ~m8_bits(v8_lt(disc, zero)) & lanes; /* isect_sphere's disc < 0: a miss */
     int i, best = -1;
     if (m == 0u)
         return -1;
-    cc = v4_sub(v4_add(v4_add(v4_mul(fx, fx), v4_mul(fy, fy)), v4_mul(fz, fz)), rr);
-    q = v4_sub(v4_mul(bb, v4_splat(-1.0f)),
-               v4_mul(v4_select(v4_ge(bb, zero), v4_splat(1.0f), v4_splat(-1.0f)), v4_sqrt(disc)));
+    cc = v8_sub(v8_add(v8_add(v8_mul(fx, fx), v8_mul(fy, fy)), v8_mul(fz, fz)), rr);
+    q = v8_sub(v8_mul(bb, v8_splat(-1.0f)),
+               v8_mul(v8_select(v8_ge(bb, zero), v8_splat(1.0f), v8_splat(-1.0f)), v8_sqrt(disc)));
     t0 = q;
-    t1 = v4_div(cc, q);
-    swap = v4_gt(t0, t1);
-    lo = v4_select(swap, t1, t0);
-    hi = v4_select(swap, t0, t1);
-    near = m4_and(m4_and(v4_gt(lo, v4_splat(tmin)), v4_lt(lo, v4_splat(tmax))), v4_gt(r, zero));
-    far = m4_and(v4_gt(hi, v4_splat(tmin)), v4_lt(hi, v4_splat(tmax)));
-    m &= m4_bits(m4_and(m4_or(near, far), v4_ne(q, zero)));
+    t1 = v8_div(cc, q);
+    swap = v8_gt(t0, t1);
+    lo = v8_select(swap, t1, t0);
+    hi = v8_select(swap, t0, t1);
+    near = m8_and(m8_and(v8_gt(lo, v8_splat(tmin)), v8_lt(lo, v8_splat(tmax))), v8_gt(r, zero));
+    far = m8_and(v8_gt(hi, v8_splat(tmin)), v8_lt(hi, v8_splat(tmax)));
+    m &= m8_bits(m8_and(m8_or(near, far), v8_ne(q, zero)));
     if (m == 0u)
         return -1;
-    t = v4_select(near, lo, hi);
-    v4_store(t, lt);
+    t = v8_select(near, lo, hi);
+    v8_store(t, lt);
     while (m != 0u) {
         i = cw_ctz(m);
         m &= m - 1u;
-        if (b->index[i] < 0 || !(lt[i] < tmax))
+        if ((i < 4 ? b0 : b1)->index[i & 3] < 0 || !(lt[i] < tmax))
             continue;
         tmax = lt[i];
         *t_out = lt[i];

@@ -109,30 +109,30 @@ typedef struct {
 } bvh_occluder;
 
 #if CW_HAS_TRIANGLES
-/* The nb blocks of four triangles from `first` (a leaf of triangles only), never the
- * triangle skip - 1, in order: on a hit closer than *t_best, records it in *hit and lowers
- * *t_best. */
+/* The nb blocks of four triangles from `first` (a leaf of triangles only), two at a time (one
+ * test, prim_tri8), never the triangle skip - 1, in order: on a hit closer than *t_best,
+ * records it in *hit and lowers *t_best. */
 CW_INLINE void bvh_closest_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri,
                                   float tmin, int skip, float *t_best, cw_hit *hit)
 {
-    BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, nb);
-    for (int k = first; k < first + nb; k++)
-        prim_tri4(w, k, ri, tmin, skip, t_best, hit);
+    BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, (nb + 1) / 2);
+    for (int k = first; k < first + nb; k += 2)
+        prim_tri8(w, k, k + 1 < first + nb, ri, tmin, skip, t_best, hit);
 }
 
-/* Whether the ray meets one of the nb blocks from `first` in (tmin, tmax), never the
- * triangle skip - 1: 0 if not, else 1 + the first block it meets. */
+/* Whether the ray meets one of the nb blocks from `first` in (tmin, tmax), tested two at a
+ * time, never the triangle skip - 1: 0 if not, else 1 + a block it meets. */
 CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri, float tmin,
                              float tmax, int skip)
 {
-    for (int k = first; k < first + nb; k++) {
+    for (int k = first; k < first + nb; k += 2) {
         float t_lim = tmax;
         cw_hit hit;
         BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
         hit.kind = CW_PRIM_NONE;
-        prim_tri4(w, k, ri, tmin, skip, &t_lim, &hit);
+        prim_tri8(w, k, k + 1 < first + nb, ri, tmin, skip, &t_lim, &hit);
         if (hit.kind != CW_PRIM_NONE)
-            return k + 1;
+            return hit.block;
     }
     return 0;
 }
@@ -150,9 +150,9 @@ CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
 #if CW_HAS_SPHERES
     if (code & CW_LEAF_SPHERES) {
         int nb = code & (CW_LEAF_SPHERES - 1);
-        BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, nb);
-        for (int k = first; k < first + nb; k++)
-            prim_sph4(w, k, ri, tmin, t_best, hit);
+        BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, (nb + 1) / 2);
+        for (int k = first; k < first + nb; k += 2)
+            prim_sph8(w, k, k + 1 < first + nb, ri, tmin, t_best, hit);
         return;
     }
 #endif
@@ -164,15 +164,17 @@ CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
 }
 
 #if CW_HAS_SPHERES
-/* Whether the ray meets one of the four spheres of block k in (tmin, tmax). */
-CW_INLINE int bvh_any_sph4(const cw_world *w, int k, const cw_rayinfo *ri, float tmin, float tmax)
+/* Whether the ray meets one of the spheres of block k, and of block k + 1 where two is set,
+ * in (tmin, tmax): 0 if not, else 1 + a block it meets. */
+CW_INLINE int bvh_any_sph8(const cw_world *w, int k, int two, const cw_rayinfo *ri, float tmin,
+                           float tmax)
 {
     float t_lim = tmax;
     cw_hit hit;
     BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
     hit.kind = CW_PRIM_NONE;
-    prim_sph4(w, k, ri, tmin, &t_lim, &hit);
-    return hit.kind != CW_PRIM_NONE;
+    prim_sph8(w, k, two, ri, tmin, &t_lim, &hit);
+    return hit.kind != CW_PRIM_NONE ? hit.block : 0;
 }
 #endif
 
@@ -185,10 +187,11 @@ CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const
 #if CW_HAS_SPHERES
     if (code & CW_LEAF_SPHERES) {
         int nb = code & (CW_LEAF_SPHERES - 1);
-        for (int k = first; k < first + nb; k++) {
-            if (bvh_any_sph4(w, k, ri, tmin, tmax)) {
+        for (int k = first; k < first + nb; k += 2) {
+            int b = bvh_any_sph8(w, k, k + 1 < first + nb, ri, tmin, tmax);
+            if (b != 0) {
                 oc->tag = BVH_OCC_SPH4;
-                oc->index = k;
+                oc->index = b - 1;
                 return 1;
             }
         }
@@ -403,7 +406,7 @@ CW_INLINE int bvh_any_cached(const cw_world *w, const bvh_occluder *oc, const cw
 #endif
 #if CW_HAS_SPHERES
     case BVH_OCC_SPH4:
-        return bvh_any_sph4(w, oc->index, ri, tmin, tmax);
+        return bvh_any_sph8(w, oc->index, 0, ri, tmin, tmax) != 0;
 #endif
     case BVH_OCC_PRIM:
         return oc->index + 1 != skip && bvh_any_prim(w, oc->index, ri, tmin, tmax);

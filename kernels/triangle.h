@@ -1,5 +1,6 @@
 /* Triangles (cw_triangle), flat or smooth (vertex normals): the ray-triangle test, one
- * triangle at a time or four of a leaf at once (cw_tri4), and the surface at a hit. */
+ * triangle at a time or the four or eight of one or two blocks of a leaf at once (cw_tri4),
+ * and the surface at a hit. */
 #ifndef CW_TRIANGLE_H
 #define CW_TRIANGLE_H
 
@@ -10,16 +11,23 @@
 #include "vecmath.h"
 #include "world.h"
 
-/* The lane of block b to report among the lanes m whose hits lie at lt[lane]: the closest
- * below tmax, leaving out unused lanes and the triangle whose CW_REF is skip - 1; the first
- * of equally close ones (as testing them one by one in lane order); -1 for none. Both
- * isect_tri4 paths end with it. */
-CW_INLINE int tri4_nearest(CW_GLOBAL const cw_tri4 *b, unsigned m, const float *lt, float tmax,
-                           int skip)
+/* The lanes of one test of blocks b0 (lanes 0-3) and b1 (lanes 4-7): lane i's coordinate
+ * array v[j] (see cw_tri4). A test of one block passes it as both and leaves lanes 4-7 out. */
+CW_INLINE cw_float8 tri8_coord(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b1, int j)
+{
+    return v8_pair(b0->v[j], b1->v[j]);
+}
+
+/* The lane of blocks b0 and b1 to report among the lanes m whose hits lie at lt[lane]: the
+ * closest below tmax, leaving out unused lanes and the triangle whose CW_REF is skip - 1; the
+ * first of equally close ones (as testing them one by one in lane order); -1 for none. Both
+ * isect_tri8 paths end with it. */
+CW_INLINE int tri8_nearest(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b1, unsigned m,
+                           const float *lt, float tmax, int skip)
 {
     int best = -1;
     while (m != 0u) {
-        int i = cw_ctz(m), idx = b->index[i];
+        int i = cw_ctz(m), idx = (i < 4 ? b0 : b1)->index[i & 3];
         m &= m - 1u;
         if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip || !(lt[i] < tmax))
             continue;
@@ -62,50 +70,55 @@ CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo 
     return 1;
 }
 
-/* The four triangles of block b at once (Moeller-Trumbore, each lane as isect_triangle):
- * the closest hit in (tmin, tmax), never the triangle whose CW_REF is skip - 1. Returns its
- * lane, the first of equally close ones (as testing them one by one in lane order), or -1.
+/* The triangles of blocks b0 and b1 at once, lanes 0-3 and 4-7 (Moeller-Trumbore, each lane
+ * as isect_triangle), of the lanes set in `lanes` (15: b0 only, b1 = b0; 255: both): the
+ * closest hit in (tmin, tmax), never the triangle whose CW_REF is skip - 1. Returns its lane,
+ * the first of equally close ones (as testing them one by one in lane order), or -1.
  * isect_triangle's tests are lane masks, and a block whose lanes all fail the determinant
  * and u tests ends there (a loop over the lanes with a branch per test made --precision
  * fast 1.6x slower than robust on a million triangles). */
-CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float tmin, float tmax,
-                         int skip, float *t_out, float *u_out, float *v_out)
+CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b1, unsigned lanes,
+                         const cw_rayinfo *ri, float tmin, float tmax, int skip, float *t_out,
+                         float *u_out, float *v_out)
 {
-    cw_float4 dx = v4_splat(ri->d.x), dy = v4_splat(ri->d.y), dz = v4_splat(ri->d.z);
-    cw_float4 e1x = v4_sub(b->v[3], b->v[0]), e1y = v4_sub(b->v[4], b->v[1]);
-    cw_float4 e1z = v4_sub(b->v[5], b->v[2]);
-    cw_float4 e2x = v4_sub(b->v[6], b->v[0]), e2y = v4_sub(b->v[7], b->v[1]);
-    cw_float4 e2z = v4_sub(b->v[8], b->v[2]);
-    cw_float4 px = v4_sub(v4_mul(dy, e2z), v4_mul(dz, e2y));
-    cw_float4 py = v4_sub(v4_mul(dz, e2x), v4_mul(dx, e2z));
-    cw_float4 pz = v4_sub(v4_mul(dx, e2y), v4_mul(dy, e2x));
-    cw_float4 det = v4_add(v4_add(v4_mul(e1x, px), v4_mul(e1y, py)), v4_mul(e1z, pz));
-    cw_float4 inv = v4_div(v4_splat(1.0f), det);
-    cw_float4 sx = v4_sub(v4_splat(ri->o.x), b->v[0]), sy = v4_sub(v4_splat(ri->o.y), b->v[1]);
-    cw_float4 sz = v4_sub(v4_splat(ri->o.z), b->v[2]);
-    cw_float4 u = v4_mul(v4_add(v4_add(v4_mul(sx, px), v4_mul(sy, py)), v4_mul(sz, pz)), inv);
-    cw_float4 zero = v4_splat(0.0f), one = v4_splat(1.0f), qx, qy, qz, v, t;
+    cw_float8 dx = v8_splat(ri->d.x), dy = v8_splat(ri->d.y), dz = v8_splat(ri->d.z);
+    cw_float8 e1x = v8_sub(tri8_coord(b0, b1, 3), tri8_coord(b0, b1, 0)),
+              e1y = v8_sub(tri8_coord(b0, b1, 4), tri8_coord(b0, b1, 1));
+    cw_float8 e1z = v8_sub(tri8_coord(b0, b1, 5), tri8_coord(b0, b1, 2));
+    cw_float8 e2x = v8_sub(tri8_coord(b0, b1, 6), tri8_coord(b0, b1, 0)),
+              e2y = v8_sub(tri8_coord(b0, b1, 7), tri8_coord(b0, b1, 1));
+    cw_float8 e2z = v8_sub(tri8_coord(b0, b1, 8), tri8_coord(b0, b1, 2));
+    cw_float8 px = v8_sub(v8_mul(dy, e2z), v8_mul(dz, e2y));
+    cw_float8 py = v8_sub(v8_mul(dz, e2x), v8_mul(dx, e2z));
+    cw_float8 pz = v8_sub(v8_mul(dx, e2y), v8_mul(dy, e2x));
+    cw_float8 det = v8_add(v8_add(v8_mul(e1x, px), v8_mul(e1y, py)), v8_mul(e1z, pz));
+    cw_float8 inv = v8_div(v8_splat(1.0f), det);
+    cw_float8 sx = v8_sub(v8_splat(ri->o.x), tri8_coord(b0, b1, 0)),
+              sy = v8_sub(v8_splat(ri->o.y), tri8_coord(b0, b1, 1));
+    cw_float8 sz = v8_sub(v8_splat(ri->o.z), tri8_coord(b0, b1, 2));
+    cw_float8 u = v8_mul(v8_add(v8_add(v8_mul(sx, px), v8_mul(sy, py)), v8_mul(sz, pz)), inv);
+    cw_float8 zero = v8_splat(0.0f), one = v8_splat(1.0f), qx, qy, qz, v, t;
     /* isect_triangle's misses so far: |det| < 1e-9, u < 0, u > 1 */
-    cw_int4 small = m4_and(v4_lt(det, v4_splat(1e-9f)), v4_gt(det, v4_splat(-1e-9f)));
-    cw_int4 out = m4_or(small, m4_or(v4_lt(u, zero), v4_gt(u, one)));
-    unsigned m = ~m4_bits(out) & 15u;
-    float lu[4], lv[4], lt[4];
+    cw_int8 small = m8_and(v8_lt(det, v8_splat(1e-9f)), v8_gt(det, v8_splat(-1e-9f)));
+    cw_int8 out = m8_or(small, m8_or(v8_lt(u, zero), v8_gt(u, one)));
+    unsigned m = ~m8_bits(out) & lanes;
+    float lu[8], lv[8], lt[8];
     int best;
     if (m == 0u)
         return -1;
-    qx = v4_sub(v4_mul(sy, e1z), v4_mul(sz, e1y));
-    qy = v4_sub(v4_mul(sz, e1x), v4_mul(sx, e1z));
-    qz = v4_sub(v4_mul(sx, e1y), v4_mul(sy, e1x));
-    v = v4_mul(v4_add(v4_add(v4_mul(dx, qx), v4_mul(dy, qy)), v4_mul(dz, qz)), inv);
-    t = v4_mul(v4_add(v4_add(v4_mul(e2x, qx), v4_mul(e2y, qy)), v4_mul(e2z, qz)), inv);
-    out = m4_or(v4_lt(v, zero), v4_gt(v4_add(u, v), one));
-    m &= m4_bits(m4_andnot(out, m4_and(v4_gt(t, v4_splat(tmin)), v4_lt(t, v4_splat(tmax)))));
+    qx = v8_sub(v8_mul(sy, e1z), v8_mul(sz, e1y));
+    qy = v8_sub(v8_mul(sz, e1x), v8_mul(sx, e1z));
+    qz = v8_sub(v8_mul(sx, e1y), v8_mul(sy, e1x));
+    v = v8_mul(v8_add(v8_add(v8_mul(dx, qx), v8_mul(dy, qy)), v8_mul(dz, qz)), inv);
+    t = v8_mul(v8_add(v8_add(v8_mul(e2x, qx), v8_mul(e2y, qy)), v8_mul(e2z, qz)), inv);
+    out = m8_or(v8_lt(v, zero), v8_gt(v8_add(u, v), one));
+    m &= m8_bits(m8_andnot(out, m8_and(v8_gt(t, v8_splat(tmin)), v8_lt(t, v8_splat(tmax)))));
     if (m == 0u)
         return -1;
-    v4_store(u, lu);
-    v4_store(v, lv);
-    v4_store(t, lt);
-    best = tri4_nearest(b, m, lt, tmax, skip);
+    v8_store(u, lu);
+    v8_store(v, lv);
+    v8_store(t, lt);
+    best = tri8_nearest(b0, b1, m, lt, tmax, skip);
     if (best >= 0) {
         *t_out = lt[best];
         *u_out = lu[best];
@@ -157,50 +170,53 @@ CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo 
     return 1;
 }
 
-/* The four triangles of block b at once, each lane with exactly isect_triangle's float
- * operations (the same hits, bit for bit): the closest hit in (tmin, tmax), never the
- * triangle whose CW_REF is skip - 1. Returns its lane, the first of equally close ones (as
- * testing them one by one in lane order), or -1. The edge-sign and determinant tests are
- * lane masks, so a block the ray misses (the common case) ends before the division and
- * without a branch per lane; an unused lane (zero vertices) has det = 0. */
-CW_INLINE int isect_tri4(CW_GLOBAL const cw_tri4 *b, const cw_rayinfo *ri, float tmin, float tmax,
-                         int skip, float *t_out, float *u_out, float *v_out)
+/* The triangles of blocks b0 and b1 at once, lanes 0-3 and 4-7, of the lanes set in `lanes`
+ * (15: b0 only, b1 = b0; 255: both), each lane with exactly isect_triangle's float operations
+ * (the same hits, bit for bit): the closest hit in (tmin, tmax), never the triangle whose
+ * CW_REF is skip - 1. One test of eight lanes takes about as long as one of four on a CPU
+ * with 256-bit vectors, so a leaf of up to eight triangles is one test (host/bvh_sah.h). Returns
+ * its lane, the first of equally close ones (as testing them one by one in lane order), or -1. The
+ * edge-sign and determinant tests are lane masks, so a block the ray misses (the common case) ends
+ * before the division and without a branch per lane; an unused lane (zero vertices) has det = 0. */
+CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b1, unsigned lanes,
+                         const cw_rayinfo *ri, float tmin, float tmax, int skip, float *t_out,
+                         float *u_out, float *v_out)
 {
     int kx = ri->kx, ky = ri->ky, kz = ri->kz;
-    cw_float4 ox = v4_splat(ri->ox), oy = v4_splat(ri->oy), oz = v4_splat(ri->oz);
-    cw_float4 sx = v4_splat(ri->sx), sy = v4_splat(ri->sy), sz = v4_splat(ri->sz);
-    cw_float4 az = v4_sub(b->v[kz], oz), bz = v4_sub(b->v[3 + kz], oz);
-    cw_float4 cz = v4_sub(b->v[6 + kz], oz);
-    cw_float4 ax = v4_sub(v4_sub(b->v[kx], ox), v4_mul(sx, az));
-    cw_float4 ay = v4_sub(v4_sub(b->v[ky], oy), v4_mul(sy, az));
-    cw_float4 bx = v4_sub(v4_sub(b->v[3 + kx], ox), v4_mul(sx, bz));
-    cw_float4 by = v4_sub(v4_sub(b->v[3 + ky], oy), v4_mul(sy, bz));
-    cw_float4 cx = v4_sub(v4_sub(b->v[6 + kx], ox), v4_mul(sx, cz));
-    cw_float4 cy = v4_sub(v4_sub(b->v[6 + ky], oy), v4_mul(sy, cz));
-    cw_float4 u = v4_sub(v4_mul(cx, by), v4_mul(cy, bx));
-    cw_float4 v = v4_sub(v4_mul(ax, cy), v4_mul(ay, cx));
-    cw_float4 w = v4_sub(v4_mul(bx, ay), v4_mul(by, ax));
-    cw_float4 zero = v4_splat(0.0f), det = v4_add(v4_add(u, v), w), tt, inv, t;
+    cw_float8 ox = v8_splat(ri->ox), oy = v8_splat(ri->oy), oz = v8_splat(ri->oz);
+    cw_float8 sx = v8_splat(ri->sx), sy = v8_splat(ri->sy), sz = v8_splat(ri->sz);
+    cw_float8 az = v8_sub(tri8_coord(b0, b1, kz), oz), bz = v8_sub(tri8_coord(b0, b1, 3 + kz), oz);
+    cw_float8 cz = v8_sub(tri8_coord(b0, b1, 6 + kz), oz);
+    cw_float8 ax = v8_sub(v8_sub(tri8_coord(b0, b1, kx), ox), v8_mul(sx, az));
+    cw_float8 ay = v8_sub(v8_sub(tri8_coord(b0, b1, ky), oy), v8_mul(sy, az));
+    cw_float8 bx = v8_sub(v8_sub(tri8_coord(b0, b1, 3 + kx), ox), v8_mul(sx, bz));
+    cw_float8 by = v8_sub(v8_sub(tri8_coord(b0, b1, 3 + ky), oy), v8_mul(sy, bz));
+    cw_float8 cx = v8_sub(v8_sub(tri8_coord(b0, b1, 6 + kx), ox), v8_mul(sx, cz));
+    cw_float8 cy = v8_sub(v8_sub(tri8_coord(b0, b1, 6 + ky), oy), v8_mul(sy, cz));
+    cw_float8 u = v8_sub(v8_mul(cx, by), v8_mul(cy, bx));
+    cw_float8 v = v8_sub(v8_mul(ax, cy), v8_mul(ay, cx));
+    cw_float8 w = v8_sub(v8_mul(bx, ay), v8_mul(by, ax));
+    cw_float8 zero = v8_splat(0.0f), det = v8_add(v8_add(u, v), w), tt, inv, t;
     /* isect_triangle's miss: some edge function < 0 and some > 0, or det = 0 */
-    cw_int4 neg = m4_or(m4_or(v4_lt(u, zero), v4_lt(v, zero)), v4_lt(w, zero));
-    cw_int4 pos = m4_or(m4_or(v4_gt(u, zero), v4_gt(v, zero)), v4_gt(w, zero));
-    unsigned m = m4_bits(m4_andnot(m4_and(neg, pos), v4_ne(det, zero)));
-    float lv[4], lw[4], lt[4], li[4];
+    cw_int8 neg = m8_or(m8_or(v8_lt(u, zero), v8_lt(v, zero)), v8_lt(w, zero));
+    cw_int8 pos = m8_or(m8_or(v8_gt(u, zero), v8_gt(v, zero)), v8_gt(w, zero));
+    unsigned m = m8_bits(m8_andnot(m8_and(neg, pos), v8_ne(det, zero))) & lanes;
+    float lv[8], lw[8], lt[8], li[8];
     int best;
     if (m == 0u)
         return -1;
-    tt = v4_add(v4_add(v4_mul(u, v4_mul(sz, az)), v4_mul(v, v4_mul(sz, bz))),
-                v4_mul(w, v4_mul(sz, cz)));
-    inv = v4_div(v4_splat(1.0f), det);
-    t = v4_mul(tt, inv);
-    m &= m4_bits(m4_and(v4_gt(t, v4_splat(tmin)), v4_lt(t, v4_splat(tmax))));
+    tt = v8_add(v8_add(v8_mul(u, v8_mul(sz, az)), v8_mul(v, v8_mul(sz, bz))),
+                v8_mul(w, v8_mul(sz, cz)));
+    inv = v8_div(v8_splat(1.0f), det);
+    t = v8_mul(tt, inv);
+    m &= m8_bits(m8_and(v8_gt(t, v8_splat(tmin)), v8_lt(t, v8_splat(tmax))));
     if (m == 0u)
         return -1;
-    v4_store(v, lv);
-    v4_store(w, lw);
-    v4_store(t, lt);
-    v4_store(inv, li);
-    best = tri4_nearest(b, m, lt, tmax, skip);
+    v8_store(v, lv);
+    v8_store(w, lw);
+    v8_store(t, lt);
+    v8_store(inv, li);
+    best = tri8_nearest(b0, b1, m, lt, tmax, skip);
     if (best >= 0) {
         *t_out = lt[best];
         *u_out = lv[best] * li[best];

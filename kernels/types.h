@@ -217,7 +217,7 @@ typedef struct {
 #define CW_COUNT_DEPTH 5 /* per-pixel kernel: the deepest ray traced (the wavefront's levels) */
 #define CW_COUNT_NEXT 6  /* per-pixel kernel: the next run of pixels to hand out */
 /* With CW_STATS, the work of the BVH walks (traverse.h): the nodes the closest-hit walks
- * visit and the primitive tests they make (a block of four: one test), then the same for
+ * visit and the primitive tests they make (one or two blocks of four: one test), then the same for
  * the shadow rays' any-hit walks (a shadow cache test included). */
 #define CW_COUNT_CLOSEST_NODES 7
 #define CW_COUNT_CLOSEST_TESTS 8

@@ -1,5 +1,6 @@
-/* v3_, v4_, vl_: vector arithmetic on vec3 (three floats), cw_float4 and cw_lanes (CW_BVH_WIDTH
- * floats: the lanes of one box test of the wide BVH), for the kernel headers: written once for
+/* v3_, v4_, v8_, vl_: vector arithmetic on vec3 (three floats), cw_float4, cw_float8 (the lanes
+ * of one test of two blocks of four primitives) and cw_lanes (CW_BVH_WIDTH floats: the lanes of
+ * one box test of the wide BVH), for the kernel headers: written once for
  * OpenCL C (vector operators and built-ins) and once for host C99 (the structs of compat.h), so
  * that the kernel headers compile as both. */
 #ifndef CW_VECMATH_H
@@ -21,76 +22,87 @@ CW_INLINE cw_float4 v4_from3(vec3 a, float w)
 {
     return (float4)(a, w);
 }
-/* four lanes (the triangles of a cw_tri4) */
-CW_INLINE cw_float4 v4_splat(float a)
+/* Eight lanes: the primitives of one or two blocks of four (cw_tri4, cw_sph4) in one test.
+ * v8_pair reads lanes 0-3 from a, 4-7 from b. */
+CW_INLINE cw_float8 v8_pair(cw_float4 a, cw_float4 b)
 {
-    return (float4)(a);
+    return (float8)(a, b);
 }
-CW_INLINE cw_float4 v4_add(cw_float4 a, cw_float4 b)
+CW_INLINE cw_float8 v8_splat(float a)
+{
+    return (float8)(a);
+}
+CW_INLINE cw_float8 v8_add(cw_float8 a, cw_float8 b)
 {
     return a + b;
 }
-CW_INLINE cw_float4 v4_sub(cw_float4 a, cw_float4 b)
+CW_INLINE cw_float8 v8_sub(cw_float8 a, cw_float8 b)
 {
     return a - b;
 }
-CW_INLINE cw_float4 v4_mul(cw_float4 a, cw_float4 b)
+CW_INLINE cw_float8 v8_mul(cw_float8 a, cw_float8 b)
 {
     return a * b;
 }
-CW_INLINE cw_float4 v4_div(cw_float4 a, cw_float4 b)
+CW_INLINE cw_float8 v8_div(cw_float8 a, cw_float8 b)
 {
     return a / b;
 }
-CW_INLINE void v4_store(cw_float4 a, float *p)
+CW_INLINE void v8_store(cw_float8 a, float *p)
 {
-    vstore4(a, 0, p);
+    vstore8(a, 0, p);
 }
-/* lane masks of four (the triangles of a cw_tri4): comparisons, and, or, and-not, bits */
-CW_INLINE cw_int4 v4_lt(cw_float4 a, cw_float4 b)
+/* lane masks of eight: comparisons, and, or, and-not, bits */
+CW_INLINE cw_int8 v8_lt(cw_float8 a, cw_float8 b)
 {
     return a < b;
 }
-CW_INLINE cw_int4 v4_gt(cw_float4 a, cw_float4 b)
+CW_INLINE cw_int8 v8_gt(cw_float8 a, cw_float8 b)
 {
     return a > b;
 }
-CW_INLINE cw_int4 v4_ne(cw_float4 a, cw_float4 b)
+CW_INLINE cw_int8 v8_ne(cw_float8 a, cw_float8 b)
 {
     return a != b;
 }
-CW_INLINE cw_int4 v4_ge(cw_float4 a, cw_float4 b)
+CW_INLINE cw_int8 v8_ge(cw_float8 a, cw_float8 b)
 {
     return a >= b;
 }
 /* m ? a : b per lane */
-CW_INLINE cw_float4 v4_select(cw_int4 m, cw_float4 a, cw_float4 b)
+CW_INLINE cw_float8 v8_select(cw_int8 m, cw_float8 a, cw_float8 b)
 {
     return select(b, a, m);
 }
-CW_INLINE cw_float4 v4_sqrt(cw_float4 a)
+CW_INLINE cw_float8 v8_sqrt(cw_float8 a)
 {
     return sqrt(a);
 }
-CW_INLINE cw_int4 m4_and(cw_int4 a, cw_int4 b)
+CW_INLINE cw_int8 m8_and(cw_int8 a, cw_int8 b)
 {
     return a & b;
 }
-CW_INLINE cw_int4 m4_or(cw_int4 a, cw_int4 b)
+CW_INLINE cw_int8 m8_or(cw_int8 a, cw_int8 b)
 {
     return a | b;
 }
 /* ~a & b */
-CW_INLINE cw_int4 m4_andnot(cw_int4 a, cw_int4 b)
+CW_INLINE cw_int8 m8_andnot(cw_int8 a, cw_int8 b)
 {
     return ~a & b;
 }
-/* the lanes set, as a bit mask (bit i: lane i) */
-CW_INLINE unsigned m4_bits(cw_int4 m)
+/* the lanes set, as a bit mask (bit i: lane i): on x86 with AVX one movemask of the sign
+ * bits, elsewhere the lanes' bits or'ed together */
+CW_INLINE unsigned m8_bits(cw_int8 m)
 {
-    int4 h = m & (int4)(1, 2, 4, 8);
+#if defined(__AVX__) && defined(__x86_64__)
+    return (unsigned)__builtin_ia32_movmskps256(as_float8(m));
+#else
+    int8 b = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    int4 h = b.lo | b.hi;
     int2 q = h.lo | h.hi;
     return (unsigned)(q.x | q.y);
+#endif
 }
 CW_INLINE vec3 v3_add(vec3 a, vec3 b)
 {
@@ -151,20 +163,13 @@ CW_INLINE cw_lanes vl_max(cw_lanes a, cw_lanes b)
 {
     return a > b ? a : b;
 }
-/* The lanes of a comparison's result m (-1 true, 0 false) as a bit mask (bit i: lane i).
- * On x86 with AVX (PoCL's and Intel's CPU devices) one movemask of the sign bits;
- * elsewhere the lanes' bits or'ed together. */
+/* The lanes of a comparison's result m (-1 true, 0 false) as a bit mask (bit i: lane i). */
 CW_INLINE unsigned vl_bits(cw_lanes_int m)
 {
-#if CW_BVH_WIDTH == 8 && defined(__AVX__) && defined(__x86_64__)
-    return (unsigned)__builtin_ia32_movmskps256(as_float8(m));
-#else
 #if CW_BVH_WIDTH == 8
-    int8 b = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
-    int4 h = b.lo | b.hi;
+    return m8_bits(m);
 #else
     int4 h = m & (int4)(1, 2, 4, 8);
-#endif
     int2 q = h.lo | h.hi;
     return (unsigned)(q.x | q.y);
 #endif
@@ -215,89 +220,85 @@ CW_INLINE cw_float4 v4_from3(vec3 a, float w)
     r.w = w;
     return r;
 }
-#define V4_OP(name, op)                                                                            \
-    CW_INLINE cw_float4 name(cw_float4 a, cw_float4 b)                                             \
+CW_INLINE cw_float8 v8_pair(cw_float4 a, cw_float4 b)
+{
+    cw_float8 r;
+    r.v[0] = a.x;
+    r.v[1] = a.y;
+    r.v[2] = a.z;
+    r.v[3] = a.w;
+    r.v[4] = b.x;
+    r.v[5] = b.y;
+    r.v[6] = b.z;
+    r.v[7] = b.w;
+    return r;
+}
+CW_INLINE cw_float8 v8_splat(float a)
+{
+    cw_float8 r;
+    for (int i = 0; i < 8; i++)
+        r.v[i] = a;
+    return r;
+}
+#define V8_OP(name, op)                                                                            \
+    CW_INLINE cw_float8 name(cw_float8 a, cw_float8 b)                                             \
     {                                                                                              \
-        a.x = a.x op b.x;                                                                          \
-        a.y = a.y op b.y;                                                                          \
-        a.z = a.z op b.z;                                                                          \
-        a.w = a.w op b.w;                                                                          \
+        for (int i = 0; i < 8; i++)                                                                \
+            a.v[i] = a.v[i] op b.v[i];                                                             \
         return a;                                                                                  \
     }
-V4_OP(v4_add, +)
-V4_OP(v4_sub, -)
-V4_OP(v4_mul, *)
-V4_OP(v4_div, /)
-#undef V4_OP
-CW_INLINE cw_float4 v4_splat(float a)
+V8_OP(v8_add, +)
+V8_OP(v8_sub, -)
+V8_OP(v8_mul, *)
+V8_OP(v8_div, /)
+#undef V8_OP
+CW_INLINE void v8_store(cw_float8 a, float *p)
 {
-    cw_float4 r;
-    r.x = r.y = r.z = r.w = a;
-    return r;
+    for (int i = 0; i < 8; i++)
+        p[i] = a.v[i];
 }
-CW_INLINE void v4_store(cw_float4 a, float *p)
-{
-    p[0] = a.x;
-    p[1] = a.y;
-    p[2] = a.z;
-    p[3] = a.w;
-}
-#define V4_CMP(name, op)                                                                           \
-    CW_INLINE cw_int4 name(cw_float4 a, cw_float4 b)                                               \
+#define V8_CMP(name, op)                                                                           \
+    CW_INLINE cw_int8 name(cw_float8 a, cw_float8 b)                                               \
     {                                                                                              \
-        cw_int4 r;                                                                                 \
-        r.x = -(a.x op b.x);                                                                       \
-        r.y = -(a.y op b.y);                                                                       \
-        r.z = -(a.z op b.z);                                                                       \
-        r.w = -(a.w op b.w);                                                                       \
+        cw_int8 r;                                                                                 \
+        for (int i = 0; i < 8; i++)                                                                \
+            r.v[i] = -(a.v[i] op b.v[i]);                                                          \
         return r;                                                                                  \
     }
-V4_CMP(v4_lt, <)
-V4_CMP(v4_gt, >)
-V4_CMP(v4_ne, !=)
-V4_CMP(v4_ge, >=)
-#undef V4_CMP
-#define M4_OP(name, expr)                                                                          \
-    CW_INLINE cw_int4 name(cw_int4 a, cw_int4 b)                                                   \
+V8_CMP(v8_lt, <)
+V8_CMP(v8_gt, >)
+V8_CMP(v8_ne, !=)
+V8_CMP(v8_ge, >=)
+#undef V8_CMP
+#define M8_OP(name, expr)                                                                          \
+    CW_INLINE cw_int8 name(cw_int8 a, cw_int8 b)                                                   \
     {                                                                                              \
-        cw_int4 r;                                                                                 \
-        r.x = expr(a.x, b.x);                                                                      \
-        r.y = expr(a.y, b.y);                                                                      \
-        r.z = expr(a.z, b.z);                                                                      \
-        r.w = expr(a.w, b.w);                                                                      \
-        return r;                                                                                  \
+        for (int i = 0; i < 8; i++)                                                                \
+            a.v[i] = expr;                                                                         \
+        return a;                                                                                  \
     }
-#define M4_AND(a, b) ((a) & (b))
-#define M4_OR(a, b) ((a) | (b))
-#define M4_ANDNOT(a, b) (~(a) & (b))
-M4_OP(m4_and, M4_AND)
-M4_OP(m4_or, M4_OR)
-M4_OP(m4_andnot, M4_ANDNOT)
-#undef M4_OP
-#undef M4_AND
-#undef M4_OR
-#undef M4_ANDNOT
-CW_INLINE unsigned m4_bits(cw_int4 m)
+M8_OP(m8_and, a.v[i] & b.v[i])
+M8_OP(m8_or, a.v[i] | b.v[i])
+M8_OP(m8_andnot, ~a.v[i] & b.v[i])
+#undef M8_OP
+CW_INLINE unsigned m8_bits(cw_int8 m)
 {
-    return (unsigned)((m.x & 1) | (m.y & 2) | (m.z & 4) | (m.w & 8));
-}
-CW_INLINE cw_float4 v4_select(cw_int4 m, cw_float4 a, cw_float4 b)
-{
-    cw_float4 r;
-    r.x = m.x ? a.x : b.x;
-    r.y = m.y ? a.y : b.y;
-    r.z = m.z ? a.z : b.z;
-    r.w = m.w ? a.w : b.w;
+    unsigned r = 0u;
+    for (int i = 0; i < 8; i++)
+        r |= (unsigned)(m.v[i] & 1) << i;
     return r;
 }
-CW_INLINE cw_float4 v4_sqrt(cw_float4 a)
+CW_INLINE cw_float8 v8_select(cw_int8 m, cw_float8 a, cw_float8 b)
 {
-    cw_float4 r;
-    r.x = sqrtf(a.x);
-    r.y = sqrtf(a.y);
-    r.z = sqrtf(a.z);
-    r.w = sqrtf(a.w);
-    return r;
+    for (int i = 0; i < 8; i++)
+        a.v[i] = m.v[i] ? a.v[i] : b.v[i];
+    return a;
+}
+CW_INLINE cw_float8 v8_sqrt(cw_float8 a)
+{
+    for (int i = 0; i < 8; i++)
+        a.v[i] = sqrtf(a.v[i]);
+    return a;
 }
 CW_INLINE vec3 v3_add(vec3 a, vec3 b)
 {

@@ -910,10 +910,10 @@ static double mean_leaf(const bvh *t, int *leaves)
     return n > 0 ? (double)refs / n : 0.0;
 }
 
-/* bvh_build_blocks: boxes marked as blocks (the kernels' triangles, tested four at a time
- * in a leaf of such only) get leaves priced by blocks, so fuller leaves; unmarked boxes, or
- * no marks, give bvh_build's tree bit for bit; a mixed set keeps every invariant, the same
- * tree on every thread count. */
+/* bvh_build_blocks: boxes marked as blocks (the kernels' triangles, tested BVH_BLOCK_TEST
+ * at a time in a leaf of such only) get leaves priced by tests, so fuller leaves; unmarked boxes,
+ * or no marks, give bvh_build's tree bit for bit; a mixed set keeps every invariant, the same tree
+ * on every thread count. */
 static void test_block_leaves(void **state)
 {
     int n = 40000, leaves_plain, leaves_blk, leaves_mixed; /* parallel at the top */
@@ -935,11 +935,11 @@ static void test_block_leaves(void **state)
     assert_int_equal(zero.num_nodes, plain.num_nodes);
     assert_memory_equal(zero.nodes, plain.nodes, (size_t)plain.num_nodes * sizeof *plain.nodes);
     assert_memory_equal(zero.refs, plain.refs, (size_t)n * sizeof *plain.refs);
-    assert_int_equal(bvh_build_blocks(&blk, b, all, n, 4, 0, err, sizeof err), 0);
-    check_tree(&blk, b, n, 4, 1, "all blocks");
-    assert_int_equal(bvh_build_blocks(&mix, b, mixed, n, 4, 3, err, sizeof err), 0);
-    check_tree(&mix, b, n, 4, 1, "4 in 5 blocks");
-    assert_int_equal(bvh_build_blocks(&mix2, b, mixed, n, 4, 1, err, sizeof err), 0);
+    assert_int_equal(bvh_build_blocks(&blk, b, all, n, BVH_BLOCK_TEST, 0, err, sizeof err), 0);
+    check_tree(&blk, b, n, BVH_BLOCK_TEST, 1, "all blocks");
+    assert_int_equal(bvh_build_blocks(&mix, b, mixed, n, BVH_BLOCK_TEST, 3, err, sizeof err), 0);
+    check_tree(&mix, b, n, BVH_BLOCK_TEST, 1, "4 in 5 blocks");
+    assert_int_equal(bvh_build_blocks(&mix2, b, mixed, n, BVH_BLOCK_TEST, 1, err, sizeof err), 0);
     assert_int_equal(mix2.num_nodes, mix.num_nodes);
     assert_memory_equal(mix2.nodes, mix.nodes, (size_t)mix.num_nodes * sizeof *mix.nodes);
     assert_memory_equal(mix2.refs, mix.refs, (size_t)n * sizeof *mix.refs);
@@ -949,11 +949,12 @@ static void test_block_leaves(void **state)
         double m_two;
         for (int i = 0; i < n; i++)
             mixed[i] = (unsigned char)(b[i].lo[0] < 5.0f ? 1 : 2);
-        assert_int_equal(bvh_build_blocks(&two, b, mixed, n, 4, 3, err, sizeof err), 0);
-        check_tree(&two, b, n, 4, 1, "two classes");
+        assert_int_equal(bvh_build_blocks(&two, b, mixed, n, BVH_BLOCK_TEST, 3, err, sizeof err),
+                         0);
+        check_tree(&two, b, n, BVH_BLOCK_TEST, 1, "two classes");
         m_two = mean_leaf(&two, &leaves_two);
         printf("  mean leaf: %.2f with two classes (%d leaves)\n", m_two, leaves_two);
-        assert_true(m_two > 3.0);
+        assert_true(m_two > 6.0);
         bvh_free(&two);
     }
     m_plain = mean_leaf(&plain, &leaves_plain);
@@ -961,8 +962,9 @@ static void test_block_leaves(void **state)
     m_mixed = mean_leaf(&mix, &leaves_mixed);
     printf("  mean leaf: %.2f unmarked (%d leaves), %.2f all blocks (%d), %.2f 4 in 5 (%d)\n",
            m_plain, leaves_plain, m_blk, leaves_blk, m_mixed, leaves_mixed);
-    /* a block of four costs one test: the soup's leaves fill up (measured 1.33 -> 3.86) */
-    assert_true(m_blk > 3.0 && m_blk > 2.0 * m_plain);
+    /* up to BVH_BLOCK_TEST (two blocks of four) cost one test: the soup's leaves fill up
+     * (measured 1.33 -> 7.59; with one block of four a test, 3.86) */
+    assert_true(m_blk > 6.0 && m_blk > 2.0 * m_plain);
     assert_true(m_mixed > m_plain && m_mixed < m_blk);
     bvh_free(&plain);
     bvh_free(&zero);
@@ -1418,22 +1420,26 @@ static void random_triangle(cw_triangle *t, const cw_triangle *prev)
     }
 }
 
-/* isect_sph4 against isect_sphere on each lane in order (the first closest wins, unused
+/* isect_sph8 against isect_sphere on each lane in order (the first closest wins, unused
  * lanes left out): the same winner and the same t, bit for bit, for rays at the spheres,
  * grazing them, from inside them, at inside-only (negative radius) and zero-radius ones,
- * and with tmax cutting between the roots. */
-static void test_sph4_matches_single(void **state)
+ * and with tmax cutting between the roots. One block or two: with up to four spheres, the
+ * second block holds spheres too, which the lane mask (15) must leave out. */
+static void test_sph8_matches_single(void **state)
 {
     int rays = 0, hits = 0;
     (void)state;
     tu_rng_seed(78);
     for (int trial = 0; trial < 4000; trial++) {
-        cw_sphere sp[4];
-        cw_sph4 b;
-        int used = 1 + (int)(rnd() * 4.0f);
-        memset(&b, 0, sizeof b);
+        cw_sphere sp[8];
+        cw_sph4 bs[2];
+        int used = 1 + (int)(rnd() * 8.0f);
+        unsigned lanes = used > 4 ? 255u : 15u;
+        memset(bs, 0, sizeof bs);
         memset(sp, 0, sizeof sp);
-        for (int l = 0; l < 4; l++) {
+        for (int l = 0; l < 8; l++) {
+            cw_sph4 *bp = &bs[l / 4];
+            int bl = l % 4;
             float r = rnd_range(0.05f, 1.0f), kind = rnd();
             sp[l].center.x = rnd_range(-2.0f, 2.0f);
             sp[l].center.y = rnd_range(-2.0f, 2.0f);
@@ -1441,15 +1447,15 @@ static void test_sph4_matches_single(void **state)
             sp[l].center.w = kind < 0.15f ? -r : kind < 0.2f ? 0.0f : r;
             if (l > 0 && kind > 0.9f) /* the same sphere twice: a tie */
                 sp[l] = sp[l - 1];
-            if (l >= used) {
-                b.index[l] = -1;
+            if (l >= used && (used > 4 || l < 4)) {
+                bp->index[bl] = -1;
                 continue;
             }
-            tri4_lane(&b.cx, l, sp[l].center.x);
-            tri4_lane(&b.cy, l, sp[l].center.y);
-            tri4_lane(&b.cz, l, sp[l].center.z);
-            tri4_lane(&b.r, l, sp[l].center.w);
-            b.index[l] = 20 + l;
+            tri4_lane(&bp->cx, bl, sp[l].center.x);
+            tri4_lane(&bp->cy, bl, sp[l].center.y);
+            tri4_lane(&bp->cz, bl, sp[l].center.z);
+            tri4_lane(&bp->r, bl, sp[l].center.w);
+            bp->index[bl] = 20 + l;
         }
         for (int r = 0; r < 16; r++) {
             const cw_sphere *aim = &sp[(int)(rnd() * (float)used)];
@@ -1479,7 +1485,7 @@ static void test_sph4_matches_single(void **state)
                     want = l;
                 }
             }
-            int got = isect_sph4(&b, o, d, tmin, tmax, &t4);
+            int got = isect_sph8(&bs[0], &bs[1], lanes, o, d, tmin, tmax, &t4);
             assert_int_equal(got, want);
             if (want >= 0) {
                 assert_memory_equal(&t4, &t1, sizeof t1);
@@ -1488,36 +1494,41 @@ static void test_sph4_matches_single(void **state)
             rays++;
         }
     }
-    printf("  %d rays, %d hits: isect_sph4 = isect_sphere lane by lane\n", rays, hits);
+    printf("  %d rays, %d hits: isect_sph8 = isect_sphere lane by lane\n", rays, hits);
     assert_true(hits > rays / 4);
 }
 
-/* isect_tri4 against isect_triangle on each lane in order (the first closest wins, skip
+/* isect_tri8 against isect_triangle on each lane in order (the first closest wins, skip
  * and unused lanes left out): the same winner and the same t, u and v, bit for bit, for
- * rays through the triangles, along their edges and past them. */
-static void test_tri4_matches_single(void **state)
+ * rays through the triangles, along their edges and past them. One block or two: with up
+ * to four triangles, the second block holds triangles too, which the lane mask (15) must
+ * leave out. */
+static void test_tri8_matches_single(void **state)
 {
     int rays = 0, hits = 0;
     (void)state;
     tu_rng_seed(77);
     for (int trial = 0; trial < 4000; trial++) {
-        cw_triangle tri[4];
-        cw_tri4 b;
-        int used = 1 + (int)(rnd() * 4.0f);
-        memset(&b, 0, sizeof b);
-        for (int l = 0; l < 4; l++) {
+        cw_triangle tri[8];
+        cw_tri4 bs[2];
+        int used = 1 + (int)(rnd() * 8.0f);
+        unsigned lanes = used > 4 ? 255u : 15u;
+        memset(bs, 0, sizeof bs);
+        for (int l = 0; l < 8; l++) {
+            cw_tri4 *bp = &bs[l / 4];
+            int bl = l % 4;
             random_triangle(&tri[l], l > 0 ? &tri[l - 1] : NULL);
-            if (l >= used) {
-                b.index[l] = -1;
+            if (l >= used && (used > 4 || l < 4)) {
+                bp->index[bl] = -1;
                 continue;
             }
             const cw_float4 *p[3] = {&tri[l].p0, &tri[l].p1, &tri[l].p2};
             for (int v = 0; v < 3; v++) {
-                tri4_lane(&b.v[3 * v], l, p[v]->x);
-                tri4_lane(&b.v[3 * v + 1], l, p[v]->y);
-                tri4_lane(&b.v[3 * v + 2], l, p[v]->z);
+                tri4_lane(&bp->v[3 * v], bl, p[v]->x);
+                tri4_lane(&bp->v[3 * v + 1], bl, p[v]->y);
+                tri4_lane(&bp->v[3 * v + 2], bl, p[v]->z);
             }
-            b.index[l] = 10 + l;
+            bp->index[bl] = 10 + l;
         }
         for (int r = 0; r < 16; r++) {
             vec3 o = v3(rnd_range(-3.0f, 3.0f), rnd_range(-3.0f, 3.0f), rnd_range(-3.0f, 3.0f));
@@ -1536,7 +1547,7 @@ static void test_tri4_matches_single(void **state)
             d = v3_norm(d);
             cw_rayinfo ri = isect_rayinfo(o, d);
             float tmax = r % 5 == 0 ? rnd_range(0.5f, 4.0f) : CW_FAR;
-            int skip = r % 3 == 0 ? CW_REF(CW_PRIM_TRIANGLE, 10 + (int)(rnd() * 4.0f)) + 1 : 0;
+            int skip = r % 3 == 0 ? CW_REF(CW_PRIM_TRIANGLE, 10 + (int)(rnd() * 8.0f)) + 1 : 0;
             float t1 = 0, u1 = 0, v1 = 0, best = tmax, t4 = 0, u4 = 0, v4v = 0;
             int want = -1;
             for (int l = 0; l < used; l++) {
@@ -1551,7 +1562,7 @@ static void test_tri4_matches_single(void **state)
                     want = l;
                 }
             }
-            int got = isect_tri4(&b, &ri, 0.0f, tmax, skip, &t4, &u4, &v4v);
+            int got = isect_tri8(&bs[0], &bs[1], lanes, &ri, 0.0f, tmax, skip, &t4, &u4, &v4v);
             assert_int_equal(got, want);
             if (want >= 0) {
                 assert_memory_equal(&t4, &t1, sizeof t1);
@@ -1562,8 +1573,9 @@ static void test_tri4_matches_single(void **state)
             rays++;
         }
     }
-    printf("  %d rays against blocks of 1-4 triangles, %d hits: the same as one by one\n", rays,
-           hits);
+    printf(
+        "  %d rays against 1-8 triangles in one or two blocks, %d hits: the same as one by one\n",
+        rays, hits);
     assert_true(hits > rays / 4);
 }
 
@@ -1705,8 +1717,8 @@ int main(void)
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_collapse_wide),
         cmocka_unit_test(test_collapse_least_area),
-        cmocka_unit_test(test_tri4_matches_single),
-        cmocka_unit_test(test_sph4_matches_single),
+        cmocka_unit_test(test_tri8_matches_single),
+        cmocka_unit_test(test_sph8_matches_single),
         cmocka_unit_test(test_triangle_blocks),
         cmocka_unit_test(test_empty_and_tiny),
         cmocka_unit_test(test_random_invariants),
