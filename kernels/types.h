@@ -41,12 +41,13 @@ typedef struct {
     int pad0, pad1;
 } cw_triangle;
 
-/* Up to four triangles of one BVH leaf side by side, for one 4-wide ray-triangle test
- * (triangle.h): v[3 * k + a] holds coordinate a (x, y, z) of vertex k (p0, p1, p2), lane i
- * that of triangle index[i] (an index into the triangle array); an unused lane has index
- * -1 and zero vertices. Lane i's material and normals are triangle index[i]'s, so that the
- * surface at a hit in a block (cw_hit.block) is made from the block the test has just
- * read, not from a second, random read of the triangle array: three cache lines in all. */
+/* Up to four triangles of one BVH leaf side by side, tested alone or with the leaf's next
+ * block in one 8-lane ray-triangle test (isect_tri8, triangle.h): v[3 * k + a] holds coordinate a
+ * (x, y, z) of vertex k (p0, p1, p2), lane i that of triangle index[i] (an index into the triangle
+ * array); an unused lane has index -1 and zero vertices. Lane i's material and normals are triangle
+ * index[i]'s, so that the surface at a hit in a block (cw_hit.block) is made from the block the
+ * test has just read, not from a second, random read of the triangle array: three cache lines in
+ * all. */
 typedef struct {
     cw_float4 v[9];
     int index[4];
@@ -54,11 +55,11 @@ typedef struct {
     int normals[4];
 } cw_tri4;
 
-/* Up to four spheres of one BVH leaf side by side, for one 4-wide ray-sphere test
- * (sphere.h): lane i of cx, cy, cz, r is sphere index[i]'s centre and radius (an index into
- * the sphere array) and material[i] its material, so that the surface at a hit in a block
- * (cw_hit.block) is made from the block, not from a random read of the sphere array; an
- * unused lane has index -1, material 0 and radius 0 at the origin. */
+/* Up to four spheres of one BVH leaf side by side, tested alone or with the leaf's next
+ * block in one 8-lane ray-sphere test (isect_sph8, sphere.h): lane i of cx, cy, cz, r is sphere
+ * index[i]'s centre and radius (an index into the sphere array) and material[i] its material, so
+ * that the surface at a hit in a block (cw_hit.block) is made from the block, not from a random
+ * read of the sphere array; an unused lane has index -1, material 0 and radius 0 at the origin. */
 typedef struct {
     cw_float4 cx, cy, cz, r;
     int index[4];
