@@ -23,10 +23,12 @@ CW_INLINE cw_float4 v4_from3(vec3 a, float w)
     return (float4)(a, w);
 }
 /* Eight lanes: the primitives of one or two blocks of four (cw_tri4, cw_sph4) in one test.
- * v8_pair reads lanes 0-3 from a, 4-7 from b. */
+ * v8_pair reads lanes 0-3 from a, 4-7 from b. Written lane by lane, not (float8)(a, b): that
+ * is a shuffle from four lanes to eight, on which Oclgrind 21.10's --uninitialized check
+ * crashes (the optimised build makes the same one shuffle of it either way). */
 CW_INLINE cw_float8 v8_pair(cw_float4 a, cw_float4 b)
 {
-    return (float8)(a, b);
+    return (float8)(a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w);
 }
 CW_INLINE cw_float8 v8_splat(float a)
 {
