@@ -75,6 +75,9 @@ static void usage(FILE *f)
 "      --stats           count rays (eye, shadow, secondary; hits) and the BVH\n"
 "                        walks' work, and print them with the time of each phase\n"
 "                        and the device (default: off)\n"
+"      --repeat N        after each image, render it N - 1 more times on the same\n"
+"                        device (1.." STR(CW_MAX_REPEAT) ") and print every render's time, the\n"
+"                        least and the median: timing on a busy machine (default: 1)\n"
 "  -q, --quiet           print nothing but errors: no progress bar or summary\n"
 "                        (default: off)\n"
 "      --list-devices    list the OpenCL platforms and devices, then exit\n"
@@ -163,6 +166,7 @@ enum {
     OPT_PREVIEW_SCRIPT,
     OPT_KERNEL,
     OPT_THREADS,
+    OPT_REPEAT,
     OPT_CROP,
     OPT_PNG16,
     OPT_CAMERA,
@@ -189,6 +193,7 @@ static const struct option cli_longopts[] = {
     {"half", no_argument, NULL, OPT_HALF},
     {"png16", no_argument, NULL, OPT_PNG16},
     {"threads", required_argument, NULL, OPT_THREADS},
+    {"repeat", required_argument, NULL, OPT_REPEAT},
     {"crop", required_argument, NULL, OPT_CROP},
     {"camera", required_argument, NULL, OPT_CAMERA},
     {"look-from", required_argument, NULL, OPT_LOOK_FROM},
@@ -294,6 +299,8 @@ static int parse_option(int c, const char *arg, cli_options *o)
         return parse_int("--spp", arg, 1, CW_MAX_SPP, &o->settings.spp);
     case OPT_THREADS:
         return parse_int("--threads", arg, 1, CW_MAX_THREADS, &o->threads);
+    case OPT_REPEAT:
+        return parse_int("--repeat", arg, 1, CW_MAX_REPEAT, &o->repeat);
     case OPT_CROP:
         return parse_crop(arg, &o->settings);
     case OPT_PNG16:
@@ -446,6 +453,7 @@ static int check_combinations(cli_options *o)
                           : o->write.png16      ? "--png16"
                           : o->settings.spd     ? "--spd"
                           : o->settings.stats   ? "--stats"
+                          : o->repeat > 1       ? "--repeat"
                           : o->settings.crop[1] ? "--crop"
                                                 : NULL;
         if (bad) {
@@ -477,6 +485,7 @@ int cli_parse(int argc, char **argv, cli_options *o, int *status)
     int c;
 
     memset(o, 0, sizeof *o);
+    o->repeat = 1;
     render_settings_default(&o->settings);
     image_write_opts_default(&o->write);
     if (argc > 0)

@@ -15,6 +15,7 @@ typedef struct {
     int progress;               /* PROGRESS_* from CLWHITTED_PROGRESS */
     int summary_long;           /* CLWHITTED_SUMMARY=long */
     int spp_given;              /* --spp was given */
+    int repeat;                 /* --repeat N: renders of each image (1: one) */
     const char *png_opt;        /* the last PNG-only option given (--exposure ...) */
     const char *output;         /* -o, or NULL for the default (the scene's name with .exr) */
     const char *device;         /* --device, or NULL */

@@ -54,6 +54,9 @@
 /* The kernel cache (progcache.c) reads entries of at most this many bytes. */
 #define CW_PROGCACHE_MAX_BYTES (256LL << 20)
 
+/* --repeat N: 1..CW_MAX_REPEAT. */
+#define CW_MAX_REPEAT 1000
+
 /* --threads N: 1..CW_MAX_THREADS. */
 #define CW_MAX_THREADS 1024
 

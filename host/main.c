@@ -174,6 +174,61 @@ static void report(const cli_options *o, const image *img, const scene *s, const
     }
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* --repeat N: renders the scene N - 1 more times after the first (trace_s) on the same
+ * renderer, into a scratch image, and prints every render's time with their least and
+ * median (unless -q). Returns 0, or -1 after printing an error. */
+static int repeat_renders(const cli_options *o, renderer *r, double trace_s, progress_bar *bar)
+{
+    char err[2048];
+    double *times = malloc((size_t)o->repeat * sizeof *times), *sorted;
+    int k, rc = -1;
+    if (!times) {
+        fail_msg(bar, "out of memory for --repeat");
+        return -1;
+    }
+    sorted = malloc((size_t)o->repeat * sizeof *sorted);
+    if (!sorted) {
+        fail_msg(bar, "out of memory for --repeat");
+        goto out_free_times;
+    }
+    times[0] = trace_s;
+    renderer_set_progress(r, NULL, NULL);
+    for (k = 1; k < o->repeat; k++) {
+        image scratch;
+        render_stats st;
+        memset(&scratch, 0, sizeof scratch);
+        if (renderer_render(r, &scratch, err, sizeof err) != 0) {
+            fail_msg(bar, err);
+            goto out_free_sorted;
+        }
+        image_free(&scratch);
+        renderer_get_stats(r, &st);
+        times[k] = st.trace_s;
+    }
+    memcpy(sorted, times, (size_t)o->repeat * sizeof *sorted);
+    qsort(sorted, (size_t)o->repeat, sizeof *sorted, cmp_double);
+    if (!o->quiet) {
+        printf("repeat: %d renders, render least %.4f s, median %.4f s:", o->repeat, sorted[0],
+               o->repeat % 2 ? sorted[o->repeat / 2]
+                             : 0.5 * (sorted[o->repeat / 2 - 1] + sorted[o->repeat / 2]));
+        for (k = 0; k < o->repeat; k++)
+            printf(" %.4f", times[k]);
+        printf("\n");
+    }
+    rc = 0;
+out_free_sorted:
+    free(sorted);
+out_free_times:
+    free(times);
+    return rc;
+}
+
 /* What a batch render holds until the end of the process. */
 typedef struct {
     scene s;
@@ -234,6 +289,8 @@ static int render_batch(cli_options *o, const char *path, batch *b, progress_bar
     }
     t->written = sys_now();
     report(o, &b->img, s, r, output, t, &st, trace_s);
+    if (o->repeat > 1 && repeat_renders(o, r, trace_s, bar) != 0)
+        return 1;
     return summary_written();
 }
 

@@ -288,10 +288,12 @@ static int parse(job *j, int argc, char **argv, int *status)
         close(saved_out);
         close(saved_err);
     }
-    if (rc == CLI_RUN && (j->o.preview || j->o.settings.crop[1] != 0)) {
+    if (rc == CLI_RUN && (j->o.preview || j->o.settings.crop[1] != 0 || j->o.repeat > 1)) {
         if (j->rank == 0)
             fprintf(stderr, "clwhitted-mpi: %s is not available over MPI\n" CLI_HINT,
-                    j->o.preview ? "--preview" : "--crop");
+                    j->o.preview                 ? "--preview"
+                    : j->o.settings.crop[1] != 0 ? "--crop"
+                                                 : "--repeat");
         *status = 2;
         return CLI_EXIT;
     }

@@ -138,7 +138,9 @@ usage_error "bad extension" "unsupported image extension" -o "$T/x.jpg" scenes/d
 usage_error "--spd with --spp" "--spd traces the pixel corners: it takes no --spp" --spd --spp 4 scenes/default.json
 usage_error "--spp with --spd" "--spd traces the pixel corners: it takes no --spp" --spp 1 --spd scenes/default.json
 usage_error "--preview --spd" "--spd does not apply to --preview" --preview --spd scenes/default.json
-for o in "-o $T/p.png" "--exposure 1" "--tonemap aces" "--half" "--png16" "--stats" "--crop 0,2,0,2"; do
+usage_error "bad repeat" "--repeat expects an integer in 1..1000, got '0'" --repeat 0 scenes/default.json
+usage_error "repeat out of range" "--repeat expects an integer in 1..1000, got '1001'" --repeat 1001 scenes/default.json
+for o in "-o $T/p.png" "--exposure 1" "--tonemap aces" "--half" "--png16" "--stats" "--crop 0,2,0,2" "--repeat 2"; do
     # shellcheck disable=SC2086
     usage_error "--preview $o" "${o%% *} does not apply to --preview" --preview $o scenes/default.json
 done
@@ -300,6 +302,21 @@ check_grep "--stats: what the scene uploaded" "^scene: 5 spheres, 1 triangle, 2 
 check_grep "--stats: phase times" "^time: parse [0-9.]* s, build [0-9.]* s, compile [0-9.]* s, upload [0-9.]* s, trace [0-9.]* s ([0-9]* passes), first launch [0-9.]* s$" "$T/out"
 check_grep "--stats: fixed costs" "^fixed: opencl [0-9.]* s (beside the parse), write [0-9.]* s$" "$T/out"
 check_true "no progress bar when stderr is a file" test ! -s "$T/err"
+# --repeat 3: the summary, then one line with the three renders' times, their least and median;
+# the image is the one a single render writes
+"$BIN" --repeat 3 -W 16 -H 12 -o "$T/rep.exr" scenes/default.json >"$T/out" 2>"$T/err"
+check "--repeat 3" 0 $?
+check_true "--repeat: summary and repeat lines" test "$(wc -l <"$T/out")" -eq 2
+check_grep "--repeat: the times" \
+    "^repeat: 3 renders, render least [0-9.]* s, median [0-9.]* s: [0-9.]* [0-9.]* [0-9.]*$" "$T/out"
+check_true "--repeat: least <= median <= greatest" awk '/^repeat:/ {
+    l = $6; m = $9; g = $11; if ($12 > g) g = $12; if ($13 > g) g = $13
+    exit !(l + 0 <= m + 0 && m + 0 <= g + 0 && (l == $11 || l == $12 || l == $13)) }' "$T/out"
+"$BIN" -W 16 -H 12 -o "$T/once.exr" scenes/default.json >/dev/null 2>&1
+check_true "--repeat: the same image as one render" "$ROOT/build/imgcmp" --tol 0 --max-over 0 --min-over 0 "$T/once.exr" "$T/rep.exr"
+"$BIN" -q --repeat 2 -W 16 -H 12 -o "$T/repq.exr" scenes/default.json >"$T/out" 2>"$T/err"
+check "--repeat -q" 0 $?
+check_true "--repeat -q: nothing on stdout" test ! -s "$T/out"
 # CLWHITTED_SUMMARY=long: the phases and the device, for scripts (tools/gallery, tools/bench)
 CLWHITTED_SUMMARY=long "$BIN" -W 16 -H 12 -o "$T/long.png" scenes/default.json >"$T/out" 2>"$T/err"
 check "CLWHITTED_SUMMARY=long" 0 $?

@@ -118,6 +118,9 @@ check_true "--preview is a usage error" has "--preview is not available over MPI
 timeout 60 $RUN -np 2 "$MPI" --crop 0,8,0,8 -o "$T/c.exr" scenes/default.json >"$T/log" 2>&1
 check "--crop: exit 2" 2 $?
 check_true "--crop is a usage error" has "--crop is not available over MPI"
+timeout 60 $RUN -np 2 "$MPI" --repeat 2 -o "$T/r.exr" scenes/default.json >"$T/log" 2>&1
+check "--repeat: exit 2" 2 $?
+check_true "--repeat is a usage error" has "--repeat is not available over MPI"
 
 # ---- several scenes: one after the other, each to its own NAME.exr, clwhitted's pixels -----
 ROOT=$(pwd)
