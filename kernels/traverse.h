@@ -93,9 +93,10 @@ CW_INLINE int bvh_next(int *stack, float *stack_t, int *sp, const int *ci, const
     }
 }
 
-/* A shadow cache entry (Haines and Greenberg's light buffer, cut down to one occluder):
- * what blocked the last shadow ray toward one light, a block of four triangles or spheres
- * (tag BVH_OCC_TRI4 or _SPH4, index: the block) or a primitive (BVH_OCC_PRIM, index: its
+/* A shadow cache entry (Haines and Greenberg's light buffer, cut down to one leaf test):
+ * what blocked the last shadow ray toward one light, a test of one or two blocks of four
+ * triangles or spheres (tag BVH_OCC_TRI4 or _SPH4, index: the first block, two: the next one
+ * too), the eight lanes the walk's test met it in, or a primitive (BVH_OCC_PRIM, index: its
  * CW_REF), or nothing (BVH_OCC_NONE). bvh_any tests it before its walk. The answer does not
  * change: the entry is tested with the walk's own primitive tests and skip, and a hit the
  * primitive test finds is one the walk finds too (its box test is conservative on the robust
@@ -105,7 +106,7 @@ CW_INLINE int bvh_next(int *stack, float *stack_t, int *sp, const int *ci, const
 #define BVH_OCC_SPH4 2
 #define BVH_OCC_PRIM 3
 typedef struct {
-    int tag, index;
+    int tag, index, two;
 } bvh_occluder;
 
 #if CW_HAS_TRIANGLES
@@ -121,7 +122,8 @@ CW_INLINE void bvh_closest_blocks(const cw_world *w, int first, int nb, const cw
 }
 
 /* Whether the ray meets one of the nb blocks from `first` in (tmin, tmax), tested two at a
- * time, never the triangle skip - 1: 0 if not, else 1 + a block it meets. */
+ * time, never the triangle skip - 1: 0 if not, else 1 + the first block of the test that
+ * met it (the next block was in that test too where it is one of the nb). */
 CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri, float tmin,
                              float tmax, int skip)
 {
@@ -132,7 +134,7 @@ CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayi
         hit.kind = CW_PRIM_NONE;
         prim_tri8(w, k, k + 1 < first + nb, ri, tmin, skip, &t_lim, &hit);
         if (hit.kind != CW_PRIM_NONE)
-            return hit.block;
+            return k + 1;
     }
     return 0;
 }
@@ -165,7 +167,7 @@ CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
 
 #if CW_HAS_SPHERES
 /* Whether the ray meets one of the spheres of block k, and of block k + 1 where two is set,
- * in (tmin, tmax): 0 if not, else 1 + a block it meets. */
+ * in (tmin, tmax). */
 CW_INLINE int bvh_any_sph8(const cw_world *w, int k, int two, const cw_rayinfo *ri, float tmin,
                            float tmax)
 {
@@ -174,12 +176,12 @@ CW_INLINE int bvh_any_sph8(const cw_world *w, int k, int two, const cw_rayinfo *
     BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
     hit.kind = CW_PRIM_NONE;
     prim_sph8(w, k, two, ri, tmin, &t_lim, &hit);
-    return hit.kind != CW_PRIM_NONE ? hit.block : 0;
+    return hit.kind != CW_PRIM_NONE;
 }
 #endif
 
 /* Whether the ray meets a world leaf of blocks (count < -1) in (tmin, tmax), never the
- * triangle skip - 1: 0 if not, else the block it met, as a shadow cache entry in *oc. */
+ * triangle skip - 1: 0 if not, else 1 with the test that met it as a shadow cache entry in *oc. */
 CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const cw_rayinfo *ri,
                                   float tmin, float tmax, int skip, bvh_occluder *oc)
 {
@@ -188,10 +190,11 @@ CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const
     if (code & CW_LEAF_SPHERES) {
         int nb = code & (CW_LEAF_SPHERES - 1);
         for (int k = first; k < first + nb; k += 2) {
-            int b = bvh_any_sph8(w, k, k + 1 < first + nb, ri, tmin, tmax);
-            if (b != 0) {
+            int two = k + 1 < first + nb;
+            if (bvh_any_sph8(w, k, two, ri, tmin, tmax)) {
                 oc->tag = BVH_OCC_SPH4;
-                oc->index = b - 1;
+                oc->index = k;
+                oc->two = two;
                 return 1;
             }
         }
@@ -205,6 +208,7 @@ CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const
             return 0;
         oc->tag = BVH_OCC_TRI4;
         oc->index = b - 1;
+        oc->two = b < first + code;
         return 1;
     }
 #else
@@ -402,11 +406,11 @@ CW_INLINE int bvh_any_cached(const cw_world *w, const bvh_occluder *oc, const cw
     switch (oc->tag) {
 #if CW_HAS_TRIANGLES
     case BVH_OCC_TRI4:
-        return bvh_any_blocks(w, oc->index, 1, ri, tmin, tmax, skip) != 0;
+        return bvh_any_blocks(w, oc->index, oc->two ? 2 : 1, ri, tmin, tmax, skip) != 0;
 #endif
 #if CW_HAS_SPHERES
     case BVH_OCC_SPH4:
-        return bvh_any_sph8(w, oc->index, 0, ri, tmin, tmax) != 0;
+        return bvh_any_sph8(w, oc->index, oc->two, ri, tmin, tmax);
 #endif
     case BVH_OCC_PRIM:
         return oc->index + 1 != skip && bvh_any_prim(w, oc->index, ri, tmin, tmax);
