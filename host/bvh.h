@@ -59,9 +59,8 @@ int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int t
 
 /* bvh_build_threads where blocks[i] (0 .. BVH_BLOCK_CLASSES) gives box i's block class: the
  * SAH prices a leaf of n primitives of one class at ceil(n / BVH_BLOCK_TEST) tests, so it
- * prefers full tests; 0 (or blocks NULL) is a primitive tested alone (bvh_build_threads' tree).
- * threads
- * <= 0: one per online core. */
+ * prefers full tests; 0 (or blocks NULL) is a primitive tested alone (bvh_build_threads'
+ * tree). threads <= 0: one per online core. */
 int bvh_build_blocks(bvh *out, const bvh_box *boxes, const unsigned char *blocks, int n,
                      int max_leaf, int threads, char *err, size_t errlen);
 /* bvh_build_blocks for a caller done with its boxes (*boxes, from malloc): they are freed,

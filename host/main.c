@@ -186,17 +186,13 @@ static int cmp_double(const void *a, const void *b)
 static int repeat_renders(const cli_options *o, renderer *r, double trace_s, progress_bar *bar)
 {
     char err[2048];
-    double *times = malloc((size_t)o->repeat * sizeof *times), *sorted;
+    double *times = malloc(2 * (size_t)o->repeat * sizeof *times), *sorted;
     int k, rc = -1;
     if (!times) {
         fail_msg(bar, "out of memory for --repeat");
         return -1;
     }
-    sorted = malloc((size_t)o->repeat * sizeof *sorted);
-    if (!sorted) {
-        fail_msg(bar, "out of memory for --repeat");
-        goto out_free_times;
-    }
+    sorted = times + o->repeat; /* the same times, in order */
     times[0] = trace_s;
     renderer_set_progress(r, NULL, NULL);
     for (k = 1; k < o->repeat; k++) {
@@ -205,7 +201,7 @@ static int repeat_renders(const cli_options *o, renderer *r, double trace_s, pro
         memset(&scratch, 0, sizeof scratch);
         if (renderer_render(r, &scratch, err, sizeof err) != 0) {
             fail_msg(bar, err);
-            goto out_free_sorted;
+            goto out_free_times;
         }
         image_free(&scratch);
         renderer_get_stats(r, &st);
@@ -222,8 +218,6 @@ static int repeat_renders(const cli_options *o, renderer *r, double trace_s, pro
         printf("\n");
     }
     rc = 0;
-out_free_sorted:
-    free(sorted);
 out_free_times:
     free(times);
     return rc;

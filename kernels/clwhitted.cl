@@ -16,6 +16,16 @@
 #include "wavefront.h"
 #include "world.h"
 
+#if CW_STATS
+/* Adds a work-item's walk counts (BVH_COUNT, traverse.h) to the counters. */
+static void cw_add_walk(__global int *counters, const int *walk)
+{
+    for (int k = 0; k < CW_WALK_COUNTS; k++)
+        if (walk[k] != 0)
+            atomic_add(&counters[CW_COUNT_CLOSEST_NODES + k], walk[k]);
+}
+#endif
+
 #if CW_PIXEL
 
 /* Rows [row0, row0 + nrows) in tiles of CW_PIX_TILE x CW_PIX_TILE pixels, row by row within a
@@ -64,9 +74,7 @@ cw_pixel(CW_WORLD_ARGS, __global const cw_light *lights, __global const cw_mater
     if (st.n[CW_COUNT_DEPTH] > 1)
         atomic_max(&counters[CW_COUNT_DEPTH], st.n[CW_COUNT_DEPTH]);
 #if CW_STATS
-    for (k = 0; k < CW_WALK_COUNTS; k++)
-        if (walk[k] != 0)
-            atomic_add(&counters[CW_COUNT_CLOSEST_NODES + k], walk[k]);
+    cw_add_walk(counters, walk);
 #endif
 }
 
@@ -105,8 +113,7 @@ __kernel void cw_intersect(CW_WORLD_ARGS, __global const cw_ray *rays, __global 
 #if CW_STATS
     if (hit.kind != CW_PRIM_NONE)
         atomic_inc(&counters[ray.depth == 1 ? CW_COUNT_EYE_HITS : CW_COUNT_SECONDARY_HITS]);
-    atomic_add(&counters[CW_COUNT_CLOSEST_NODES], walk[0]);
-    atomic_add(&counters[CW_COUNT_CLOSEST_TESTS], walk[1]);
+    cw_add_walk(counters, walk);
 #else
     (void)counters;
 #endif
@@ -156,8 +163,7 @@ __kernel void cw_occlude(CW_WORLD_ARGS, __global const cw_shadow_ray *shadows,
     }
     wave_add_local(image, shadows[gid].pixel, sum);
 #if CW_STATS
-    atomic_add(&counters[CW_COUNT_ANY_NODES], walk[2]);
-    atomic_add(&counters[CW_COUNT_ANY_TESTS], walk[3]);
+    cw_add_walk(counters, walk);
 #endif
     (void)counters;
 }

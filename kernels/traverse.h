@@ -109,113 +109,77 @@ typedef struct {
     int tag, index, two;
 } bvh_occluder;
 
-#if CW_HAS_TRIANGLES
-/* The nb blocks of four triangles from `first` (a leaf of triangles only), two at a time (one
- * test, prim_tri8), never the triangle skip - 1, in order: on a hit closer than *t_best,
- * records it in *hit and lowers *t_best. */
-CW_INLINE void bvh_closest_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri,
-                                  float tmin, int skip, float *t_best, cw_hit *hit)
-{
-    BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, (nb + 1) / 2);
-    for (int k = first; k < first + nb; k += 2)
-        prim_tri8(w, k, k + 1 < first + nb, ri, tmin, skip, t_best, hit);
-}
-
-/* Whether the ray meets one of the nb blocks from `first` in (tmin, tmax), tested two at a
- * time, never the triangle skip - 1: 0 if not, else 1 + the first block of the test that
- * met it (the next block was in that test too where it is one of the nb). */
-CW_INLINE int bvh_any_blocks(const cw_world *w, int first, int nb, const cw_rayinfo *ri, float tmin,
-                             float tmax, int skip)
-{
-    for (int k = first; k < first + nb; k += 2) {
-        float t_lim = tmax;
-        cw_hit hit;
-        BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
-        hit.kind = CW_PRIM_NONE;
-        prim_tri8(w, k, k + 1 < first + nb, ri, tmin, skip, &t_lim, &hit);
-        if (hit.kind != CW_PRIM_NONE)
-            return k + 1;
-    }
-    return 0;
-}
-#endif
-
 #if CW_HAS_SPHERES || CW_HAS_TRIANGLES
-/* A world leaf of blocks (count < -1, see CW_LEAF_SPHERES): its blocks of spheres or of
- * triangles in order, never the triangle skip - 1; on a hit closer than *t_best, records it
- * in *hit and lowers *t_best. */
-CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
-                                       const cw_rayinfo *ri, float tmin, int skip, float *t_best,
-                                       cw_hit *hit)
+/* One leaf test (see CW_LEAF_SPHERES): block k of a leaf of blocks and, where two is set,
+ * block k + 1 too, of spheres where spheres is set, else of triangles (never the triangle
+ * skip - 1), in one 8-lane test: on a hit closer than *t_best, records it in *hit and lowers
+ * *t_best. */
+CW_INLINE void bvh_leaf_test(const cw_world *w, int spheres, int k, int two, const cw_rayinfo *ri,
+                             float tmin, int skip, float *t_best, cw_hit *hit)
 {
-    int code = -1 - count;
 #if CW_HAS_SPHERES
-    if (code & CW_LEAF_SPHERES) {
-        int nb = code & (CW_LEAF_SPHERES - 1);
-        BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, (nb + 1) / 2);
-        for (int k = first; k < first + nb; k += 2)
-            prim_sph8(w, k, k + 1 < first + nb, ri, tmin, t_best, hit);
+    if (spheres) {
+        prim_sph8(w, k, two, ri, tmin, t_best, hit);
         return;
     }
 #endif
 #if CW_HAS_TRIANGLES
-    bvh_closest_blocks(w, first, code, ri, tmin, skip, t_best, hit);
-#else
-    (void)skip;
+    prim_tri8(w, k, two, ri, tmin, skip, t_best, hit);
 #endif
+    (void)spheres;
+    (void)skip;
 }
 
-#if CW_HAS_SPHERES
-/* Whether the ray meets one of the spheres of block k, and of block k + 1 where two is set,
- * in (tmin, tmax). */
-CW_INLINE int bvh_any_sph8(const cw_world *w, int k, int two, const cw_rayinfo *ri, float tmin,
-                           float tmax)
+/* A leaf of blocks (count < -1): whether it holds spheres, and the end of its blocks from
+ * `first`, in *end. */
+CW_INLINE int bvh_leaf_spheres(int first, int count, int *end)
+{
+    int code = -1 - count;
+    *end = first + (code & (CW_LEAF_SPHERES - 1));
+    return (code & CW_LEAF_SPHERES) != 0;
+}
+
+/* A leaf of blocks (count < -1), of the world's tree or a mesh's: its blocks two at a time
+ * in order, never the triangle skip - 1; on a hit closer than *t_best, records it in *hit
+ * and lowers *t_best. */
+CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
+                                       const cw_rayinfo *ri, float tmin, int skip, float *t_best,
+                                       cw_hit *hit)
+{
+    int end, spheres = bvh_leaf_spheres(first, count, &end);
+    BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, (end - first + 1) / 2);
+    for (int k = first; k < end; k += 2)
+        bvh_leaf_test(w, spheres, k, k + 1 < end, ri, tmin, skip, t_best, hit);
+}
+
+/* Whether the ray meets one leaf test (bvh_leaf_test) in (tmin, tmax). */
+CW_INLINE int bvh_any_test(const cw_world *w, int spheres, int k, int two, const cw_rayinfo *ri,
+                           float tmin, float tmax, int skip)
 {
     float t_lim = tmax;
     cw_hit hit;
     BVH_COUNT(w, CW_COUNT_ANY_TESTS, 1);
     hit.kind = CW_PRIM_NONE;
-    prim_sph8(w, k, two, ri, tmin, &t_lim, &hit);
+    bvh_leaf_test(w, spheres, k, two, ri, tmin, skip, &t_lim, &hit);
     return hit.kind != CW_PRIM_NONE;
 }
-#endif
 
-/* Whether the ray meets a world leaf of blocks (count < -1) in (tmin, tmax), never the
- * triangle skip - 1: 0 if not, else 1 with the test that met it as a shadow cache entry in *oc. */
+/* Whether the ray meets a leaf of blocks (count < -1) in (tmin, tmax), never the triangle
+ * skip - 1: 0 if not, else 1 with the test that met it as a shadow cache entry in *oc. */
 CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const cw_rayinfo *ri,
                                   float tmin, float tmax, int skip, bvh_occluder *oc)
 {
-    int code = -1 - count;
-#if CW_HAS_SPHERES
-    if (code & CW_LEAF_SPHERES) {
-        int nb = code & (CW_LEAF_SPHERES - 1);
-        for (int k = first; k < first + nb; k += 2) {
-            int two = k + 1 < first + nb;
-            if (bvh_any_sph8(w, k, two, ri, tmin, tmax)) {
-                oc->tag = BVH_OCC_SPH4;
-                oc->index = k;
-                oc->two = two;
-                return 1;
-            }
+    int end, spheres = bvh_leaf_spheres(first, count, &end);
+    for (int k = first; k < end; k += 2) {
+        int two = k + 1 < end;
+        if (bvh_any_test(w, spheres, k, two, ri, tmin, tmax, skip)) {
+            oc->tag = spheres ? BVH_OCC_SPH4 : BVH_OCC_TRI4;
+            oc->index = k;
+            oc->two = two;
+            return 1;
         }
-        return 0;
     }
-#endif
-#if CW_HAS_TRIANGLES
-    {
-        int b = bvh_any_blocks(w, first, code, ri, tmin, tmax, skip);
-        if (b == 0)
-            return 0;
-        oc->tag = BVH_OCC_TRI4;
-        oc->index = b - 1;
-        oc->two = b < first + code;
-        return 1;
-    }
-#else
-    (void)skip;
-    (void)oc;
     return 0;
-#endif
 }
 #endif
 
@@ -266,7 +230,7 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
                     }
                 }
             } else if (count < -1) {
-                bvh_closest_blocks(w, nd->child[i], -1 - count, ri, tmin, skip, t_best, hit);
+                bvh_closest_leaf_blocks(w, nd->child[i], count, ri, tmin, skip, t_best, hit);
             }
         }
         node = bvh_next(stack, stack_t, &sp, ci, ct, n, *t_best);
@@ -282,6 +246,7 @@ CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, fl
 {
     int stack[CW_BVH_STACK];
     int sp = 0, i, k;
+    bvh_occluder unused; /* an instance's occluder is not cached (bvh_any) */
     stack[sp++] = root;
     while (sp > 0) {
         CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[stack[--sp]];
@@ -298,7 +263,8 @@ CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, fl
                 continue;
             }
             count = nd->count[i];
-            if (count < -1 && bvh_any_blocks(w, nd->child[i], -1 - count, ri, tmin, tmax, skip))
+            if (count < -1 &&
+                bvh_any_leaf_blocks(w, nd->child[i], count, ri, tmin, tmax, skip, &unused))
                 return 1;
             for (k = nd->child[i]; k < nd->child[i] + count; k++) {
                 int ref = w->refs[k];
@@ -404,13 +370,10 @@ CW_INLINE int bvh_any_cached(const cw_world *w, const bvh_occluder *oc, const cw
                              float tmin, float tmax, int skip)
 {
     switch (oc->tag) {
-#if CW_HAS_TRIANGLES
+#if CW_HAS_SPHERES || CW_HAS_TRIANGLES
     case BVH_OCC_TRI4:
-        return bvh_any_blocks(w, oc->index, oc->two ? 2 : 1, ri, tmin, tmax, skip) != 0;
-#endif
-#if CW_HAS_SPHERES
     case BVH_OCC_SPH4:
-        return bvh_any_sph8(w, oc->index, oc->two, ri, tmin, tmax);
+        return bvh_any_test(w, oc->tag == BVH_OCC_SPH4, oc->index, oc->two, ri, tmin, tmax, skip);
 #endif
     case BVH_OCC_PRIM:
         return oc->index + 1 != skip && bvh_any_prim(w, oc->index, ri, tmin, tmax);

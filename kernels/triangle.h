@@ -82,20 +82,19 @@ CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b
                          float *u_out, float *v_out)
 {
     cw_float8 dx = v8_splat(ri->d.x), dy = v8_splat(ri->d.y), dz = v8_splat(ri->d.z);
-    cw_float8 e1x = v8_sub(tri8_coord(b0, b1, 3), tri8_coord(b0, b1, 0)),
-              e1y = v8_sub(tri8_coord(b0, b1, 4), tri8_coord(b0, b1, 1));
-    cw_float8 e1z = v8_sub(tri8_coord(b0, b1, 5), tri8_coord(b0, b1, 2));
-    cw_float8 e2x = v8_sub(tri8_coord(b0, b1, 6), tri8_coord(b0, b1, 0)),
-              e2y = v8_sub(tri8_coord(b0, b1, 7), tri8_coord(b0, b1, 1));
-    cw_float8 e2z = v8_sub(tri8_coord(b0, b1, 8), tri8_coord(b0, b1, 2));
+    cw_float8 p0x = tri8_coord(b0, b1, 0), p0y = tri8_coord(b0, b1, 1);
+    cw_float8 p0z = tri8_coord(b0, b1, 2);
+    cw_float8 e1x = v8_sub(tri8_coord(b0, b1, 3), p0x), e1y = v8_sub(tri8_coord(b0, b1, 4), p0y);
+    cw_float8 e1z = v8_sub(tri8_coord(b0, b1, 5), p0z);
+    cw_float8 e2x = v8_sub(tri8_coord(b0, b1, 6), p0x), e2y = v8_sub(tri8_coord(b0, b1, 7), p0y);
+    cw_float8 e2z = v8_sub(tri8_coord(b0, b1, 8), p0z);
     cw_float8 px = v8_sub(v8_mul(dy, e2z), v8_mul(dz, e2y));
     cw_float8 py = v8_sub(v8_mul(dz, e2x), v8_mul(dx, e2z));
     cw_float8 pz = v8_sub(v8_mul(dx, e2y), v8_mul(dy, e2x));
     cw_float8 det = v8_add(v8_add(v8_mul(e1x, px), v8_mul(e1y, py)), v8_mul(e1z, pz));
     cw_float8 inv = v8_div(v8_splat(1.0f), det);
-    cw_float8 sx = v8_sub(v8_splat(ri->o.x), tri8_coord(b0, b1, 0)),
-              sy = v8_sub(v8_splat(ri->o.y), tri8_coord(b0, b1, 1));
-    cw_float8 sz = v8_sub(v8_splat(ri->o.z), tri8_coord(b0, b1, 2));
+    cw_float8 sx = v8_sub(v8_splat(ri->o.x), p0x), sy = v8_sub(v8_splat(ri->o.y), p0y);
+    cw_float8 sz = v8_sub(v8_splat(ri->o.z), p0z);
     cw_float8 u = v8_mul(v8_add(v8_add(v8_mul(sx, px), v8_mul(sy, py)), v8_mul(sz, pz)), inv);
     cw_float8 zero = v8_splat(0.0f), one = v8_splat(1.0f), qx, qy, qz, v, t;
     /* isect_triangle's misses so far: |det| < 1e-9, u < 0, u > 1 */
