@@ -17,11 +17,10 @@
 #define CW_FAR 1e30f /* tmax of camera and secondary rays */
 
 /* A ray with what the tests need precomputed once: the negated inverse direction for the
- * box test and, per axis, which of a box's two planes the ray meets first; the axis
- * permutation, permuted origin and shear of the watertight triangle test. */
+ * box test; the axis permutation, permuted origin and shear of the watertight triangle
+ * test. */
 typedef struct {
     vec3 o, d, ninv;  /* ninv = -1 / d, never infinite */
-    int near[3];      /* per axis: the index in a node's bound[] of the plane met first */
     int kx, ky, kz;   /* the axes that become x, y and z (z: the largest |d| component) */
     float ox, oy, oz; /* the origin's components on those axes */
     float sx, sy, sz;
@@ -53,11 +52,6 @@ CW_INLINE cw_rayinfo isect_rayinfo(vec3 o, vec3 d)
     /* two vector divisions for the six quotients, each rounded as a scalar one is */
     ri.ninv = v3_div(v3(-1.0f, -1.0f, -1.0f),
                      v3(isect_safe_den(d.x), isect_safe_den(d.y), isect_safe_den(d.z)));
-    /* ninv < 0 (a direction of +0 or more): the lower plane first. (o - lower) * ninv <=
-     * (o - upper) * ninv then holds to the bit, rounding being monotonic */
-    ri.near[0] = ri.ninv.x < 0.0f ? 0 : 3;
-    ri.near[1] = ri.ninv.y < 0.0f ? 1 : 4;
-    ri.near[2] = ri.ninv.z < 0.0f ? 2 : 5;
     ri.ox = ov[ri.kx];
     ri.oy = ov[ri.ky];
     ri.oz = ov[kz];
