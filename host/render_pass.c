@@ -359,7 +359,12 @@ int rpass_occlude(renderer *r, cl_int n, char *err, size_t errlen)
 }
 
 /* The per-pixel kernel over rows [row0, row0 + nrows): CW_PIX_GROUPS work-groups per compute
- * unit, which take the launch's tiles of pixels one at a time (cw_pixel). */
+ * unit, which take the launch's tiles of pixels one at a time (cw_pixel). A group has one
+ * work-item on a CPU device, else up to CW_PIX_LANES: a CPU runtime runs a group's work-items
+ * one after another on one thread, so that the first takes every tile the group gets and the
+ * others find none left; as a group of one, PoCL compiles the kernel without its loop over
+ * work-items (paired single-thread renders: teapot at 1024x1024 0.95, 11 rounds of 12
+ * faster; 1M random triangles 0.98, 14 of 20; Intel's CPU runtime: no change). */
 static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, cl_int first, char *err,
                      size_t errlen)
 {
@@ -368,7 +373,9 @@ static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, cl_in
     size_t global, local = group_size(r, kn);
     int units = renderer_compute_units(r);
     cl_int e, crow0 = row0, cnrows = nrows;
-    if (local > CW_PIX_LANES)
+    if (r->cpu)
+        local = 1;
+    else if (local > CW_PIX_LANES)
         local = CW_PIX_LANES;
     global = local * CW_PIX_GROUPS * (size_t)(units > 0 ? units : 1);
     if (set_world_args(r, kn, k, err, errlen) ||

@@ -104,7 +104,7 @@ typedef struct {
 /* The per-pixel kernel (cw_pixel) hands out the pixels of a launch in tiles of CW_PIX_TILE x
  * CW_PIX_TILE pixels (cut at the launch's edges), one tile at a time to whichever work-item
  * asks next (an atomic counter, CW_COUNT_NEXT), to CW_PIX_GROUPS work-groups of up to
- * CW_PIX_LANES work-items per compute unit. */
+ * CW_PIX_LANES work-items per compute unit (of one on a CPU device: host/render_pass.c). */
 #define CW_PIX_TILE 16
 #define CW_PIX_LANES 16
 #define CW_PIX_GROUPS 4
