@@ -370,12 +370,10 @@ static int run_pixel(renderer *r, int row0, int nrows, float sx, float sy, cl_in
 {
     const char *k = "cw_pixel";
     cl_kernel kn = r->k_pixel;
-    size_t global, local = group_size(r, kn);
+    size_t global, local = r->cpu ? 1 : group_size(r, kn);
     int units = renderer_compute_units(r);
     cl_int e, crow0 = row0, cnrows = nrows;
-    if (r->cpu)
-        local = 1;
-    else if (local > CW_PIX_LANES)
+    if (local > CW_PIX_LANES)
         local = CW_PIX_LANES;
     global = local * CW_PIX_GROUPS * (size_t)(units > 0 ? units : 1);
     if (set_world_args(r, kn, k, err, errlen) ||
