@@ -536,10 +536,10 @@ int bvh_collapse_wide_threads(const bvh *b, bvhw *out, int threads, char *err, s
     if (b->num_nodes == 0)
         return 0;
     plan = malloc((size_t)b->num_nodes * CW_BVH_WIDTH);
-    out->nodes = calloc((size_t)b->num_nodes, sizeof *out->nodes);
+    out->nodes = sys_device_calloc((size_t)b->num_nodes, sizeof *out->nodes);
     if (!out->nodes || !plan) {
         free(plan);
-        free(out->nodes);
+        sys_device_free(out->nodes);
         out->nodes = NULL;
         snprintf(err, errlen, "out of memory for the wide BVH (%d nodes)", b->num_nodes);
         return -1;
@@ -553,7 +553,8 @@ int bvh_collapse_wide_threads(const bvh *b, bvhw *out, int threads, char *err, s
     free(plan);
     out->stack_need = need + 1;
     { /* a fraction of the binary count is used: give the rest back */
-        cw_bvhw_node *shrunk = realloc(out->nodes, (size_t)out->num_nodes * sizeof *out->nodes);
+        cw_bvhw_node *shrunk =
+            sys_device_realloc(out->nodes, (size_t)out->num_nodes, sizeof *out->nodes);
         if (shrunk)
             out->nodes = shrunk;
     }
@@ -562,6 +563,6 @@ int bvh_collapse_wide_threads(const bvh *b, bvhw *out, int threads, char *err, s
 
 void bvhw_free(bvhw *b)
 {
-    free(b->nodes);
+    sys_device_free(b->nodes);
     memset(b, 0, sizeof *b);
 }

@@ -12,6 +12,7 @@
 #include "box.h"
 #include "polygon.h"
 #include "scene_geom.h"
+#include "sys.h"
 
 #define PACK_PARTS 2               /* the packing of triangle leaves: parts, one thread each */
 #define PACK_PAR_BLOCKS (1L << 16) /* fewer blocks: all parts on one thread */
@@ -45,7 +46,7 @@ void devscene_free_array(devscene *ds, int which)
 {
 #define DEVSCENE_FREE(name, data, count)                                                           \
     case CW_WORLD_ARG_##name:                                                                      \
-        free(data);                                                                                \
+        sys_device_free(data);                                                                     \
         data = NULL;                                                                               \
         break;
     switch (which) {
@@ -54,6 +55,20 @@ void devscene_free_array(devscene *ds, int which)
         break;
     }
 #undef DEVSCENE_FREE
+}
+
+void devscene_take_array(devscene *ds, int which)
+{
+#define DEVSCENE_TAKE(name, data, count)                                                           \
+    case CW_WORLD_ARG_##name:                                                                      \
+        data = NULL;                                                                               \
+        break;
+    switch (which) {
+        DEVSCENE_ARRAYS(DEVSCENE_TAKE)
+    default:
+        break;
+    }
+#undef DEVSCENE_TAKE
 }
 
 cw_float4 devscene_f4(vec3f v, float w)
@@ -88,22 +103,22 @@ static void find_materials(const scene *s, devscene *ft)
 
 void devscene_free(devscene *ds)
 {
-    free(ds->sph);
-    free(ds->sph_mat);
-    free(ds->tri);
-    free(ds->tri_blocks);
-    free(ds->sph_blocks);
-    free(ds->normals);
-    free(ds->pg);
-    free(ds->verts);
-    free(ds->bands);
-    free(ds->cones);
+    sys_device_free(ds->sph);
+    sys_device_free(ds->sph_mat);
+    sys_device_free(ds->tri);
+    sys_device_free(ds->tri_blocks);
+    sys_device_free(ds->sph_blocks);
+    sys_device_free(ds->normals);
+    sys_device_free(ds->pg);
+    sys_device_free(ds->verts);
+    sys_device_free(ds->bands);
+    sys_device_free(ds->cones);
     free(ds->lights);
     free(ds->mats);
     free(ds->boxes);
     free(ds->box_ref);
-    free(ds->refs);
-    free(ds->inst);
+    sys_device_free(ds->refs);
+    sys_device_free(ds->inst);
     free(ds->meshes);
     free(ds->mesh_boxes);
     free(ds->mesh_box_ref);
@@ -126,7 +141,7 @@ static int bands_push(devscene *ds, int v)
 {
     if (ds->nbands == ds->bands_cap) {
         size_t cap = ds->bands_cap ? 2 * ds->bands_cap : 1024;
-        int *nb = realloc(ds->bands, cap * sizeof *nb);
+        int *nb = sys_device_realloc(ds->bands, cap, sizeof *nb);
         if (!nb)
             return -1;
         ds->bands = nb;
@@ -231,14 +246,14 @@ int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *er
                  ntop + nmtri);
         return -1;
     }
-    ds->sph = calloc(s->spheres.count + 1, sizeof *ds->sph);
-    ds->sph_mat = calloc(s->spheres.count + 1, sizeof *ds->sph_mat);
-    ds->tri = calloc(s->triangles.count + nmtri + 1, sizeof *ds->tri);
-    ds->normals = calloc(s->tri_normals.count + 1, sizeof *ds->normals);
-    ds->pg = calloc(s->polygons.count + 1, sizeof *ds->pg);
-    ds->verts = calloc(s->poly_verts.count + 1, sizeof *ds->verts);
+    ds->sph = sys_device_calloc(s->spheres.count + 1, sizeof *ds->sph);
+    ds->sph_mat = sys_device_calloc(s->spheres.count + 1, sizeof *ds->sph_mat);
+    ds->tri = sys_device_calloc(s->triangles.count + nmtri + 1, sizeof *ds->tri);
+    ds->normals = sys_device_calloc(s->tri_normals.count + 1, sizeof *ds->normals);
+    ds->pg = sys_device_calloc(s->polygons.count + 1, sizeof *ds->pg);
+    ds->verts = sys_device_calloc(s->poly_verts.count + 1, sizeof *ds->verts);
     ds->nverts = (int)s->poly_verts.count;
-    ds->cones = calloc(s->cones.count + 1, sizeof *ds->cones);
+    ds->cones = sys_device_calloc(s->cones.count + 1, sizeof *ds->cones);
     ds->lights = calloc(s->lights.count + 1, sizeof *ds->lights);
     ds->mats = calloc(s->materials.count + 1, sizeof *ds->mats);
     ds->boxes = calloc(ntop + 1, sizeof *ds->boxes);
@@ -518,11 +533,11 @@ static int pack_leaves(devscene *ds, char *err, size_t errlen)
     }
     if (ntb == 0 && nsb == 0)
         return 0;
-    if (ntb > 0 && !(ds->tri_blocks = calloc(ntb, sizeof *ds->tri_blocks))) {
+    if (ntb > 0 && !(ds->tri_blocks = sys_device_calloc(ntb, sizeof *ds->tri_blocks))) {
         snprintf(err, errlen, "out of memory for %zu triangle blocks", ntb);
         return -1;
     }
-    if (nsb > 0 && !(ds->sph_blocks = calloc(nsb, sizeof *ds->sph_blocks))) {
+    if (nsb > 0 && !(ds->sph_blocks = sys_device_calloc(nsb, sizeof *ds->sph_blocks))) {
         snprintf(err, errlen, "out of memory for %zu sphere blocks", nsb);
         return -1;
     }
@@ -575,11 +590,13 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
         int *grown;
         for (i = 0; i < ds->tree.num_refs; i++)
             ds->tree.refs[i] = ds->box_ref[ds->tree.refs[i]];
-        grown = realloc(ds->tree.refs, room * sizeof *ds->refs);
+        grown = sys_device_calloc(room, sizeof *ds->refs);
         if (!grown) {
             snprintf(err, errlen, "out of memory for the BVH");
             return -1;
         }
+        memcpy(grown, ds->tree.refs, (size_t)ds->tree.num_refs * sizeof *ds->refs);
+        free(ds->tree.refs);
         ds->refs = grown;
         ds->tree.refs = NULL;
     }

@@ -76,6 +76,11 @@ void devscene_world_arrays(const devscene *ds, devscene_world *w);
  * counts stay. */
 void devscene_free_array(devscene *ds, int which);
 
+/* Hands over the host array behind kernel buffer `which` (a cw_world_arg): ds forgets it
+ * without freeing it, and the new owner frees it with sys_device_free (every such array
+ * comes from sys_device_calloc); the counts stay. */
+void devscene_take_array(devscene *ds, int which);
+
 cw_float4 devscene_f4(vec3f v, float w);
 
 /* Builds the arrays and the primitives' boxes (no BVH yet). Every position is converted to

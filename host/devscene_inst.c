@@ -11,6 +11,7 @@
 
 #include "box.h"
 #include "scene_geom.h"
+#include "sys.h"
 #include "xform.h"
 
 /* Which meshes the instances place (marks[m] = 1). */
@@ -160,7 +161,7 @@ int devinst_convert(const scene *s, devscene *ds, char *err, size_t errlen)
     ds->meshes = calloc(s->meshes.count + 1, sizeof *ds->meshes);
     ds->mesh_boxes = malloc((nbox + 1) * sizeof *ds->mesh_boxes);
     ds->mesh_box_ref = malloc((nbox + 1) * sizeof *ds->mesh_box_ref);
-    ds->inst = calloc(s->instances.count + 1, sizeof *ds->inst);
+    ds->inst = sys_device_calloc(s->instances.count + 1, sizeof *ds->inst);
     if (!marks || !ds->meshes || !ds->mesh_boxes || !ds->mesh_box_ref || !ds->inst) {
         free(marks);
         snprintf(err, errlen, "out of memory for %zu mesh triangles", nbox);
@@ -185,7 +186,7 @@ static int append_tree(devscene *ds, const bvh *b, const bvhw *t, int box_first,
     bvhw *all = &ds->tree_wide;
     int base = all->num_nodes, rbase = ds->nrefs;
     cw_bvhw_node *nodes =
-        realloc(all->nodes, ((size_t)base + (size_t)t->num_nodes) * sizeof *nodes);
+        sys_device_realloc(all->nodes, (size_t)base + (size_t)t->num_nodes, sizeof *nodes);
     if (!nodes) {
         snprintf(err, errlen, "out of memory for the meshes' BVH");
         return -1;

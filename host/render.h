@@ -88,9 +88,13 @@ typedef struct {
                        * trace_s starts: where a driver compiles the kernel for the device
                        * (PoCL does) */
     double upload_s;  /* buffer creation and upload */
-    double trace_s;   /* last renderer_render */
-    int passes;       /* ray-tree levels traced by the last render, summed over its bands
-                       * and samples (the wavefront's kernel passes; the same count per pixel) */
+    /* what the last renderer_set_scene put on the device: bytes of scene arrays a CPU device
+     * uses where the host built them (no copy: render.c, upload_world), and bytes copied
+     * (the other arrays, and always the frame, lights and materials) */
+    unsigned long long upload_in_place, upload_copied;
+    double trace_s; /* last renderer_render */
+    int passes;     /* ray-tree levels traced by the last render, summed over its bands
+                     * and samples (the wavefront's kernel passes; the same count per pixel) */
     /* the last kernel program build loaded clwhitted's binary cache */
     int program_cached;
     /* with settings.stats only (the host then waits for each kernel): time in each kernel,

@@ -73,6 +73,72 @@ unsigned long long sys_mem_available(void)
     return pages > 0 && size > 0 ? (unsigned long long)pages * (unsigned long long)size : 0;
 }
 
+/* A device array's header, in the 16 bytes before its aligned start: the allocation it
+ * lies in and its length. The allocation is the length plus SYS_DEVICE_ALIGN plus the
+ * header, so that an aligned start with the header before it always fits. */
+#define DEVICE_HEADER (2 * sizeof(size_t))
+_Static_assert(DEVICE_HEADER >= 2 * sizeof(void *), "the header holds a pointer and a size");
+
+/* The aligned start of an array in the allocation at base. */
+static char *device_start(char *base)
+{
+    uintptr_t a = ((uintptr_t)base + DEVICE_HEADER + SYS_DEVICE_ALIGN - 1) &
+                  ~(uintptr_t)(SYS_DEVICE_ALIGN - 1);
+    return base + (a - (uintptr_t)base);
+}
+
+/* Writes the header of the array at p: its allocation and length. */
+static void *device_header(char *p, char *base, size_t bytes)
+{
+    memcpy(p - DEVICE_HEADER, &base, sizeof base);
+    memcpy(p - sizeof(size_t), &bytes, sizeof bytes);
+    return p;
+}
+
+void *sys_device_calloc(size_t n, size_t size)
+{
+    size_t bytes;
+    char *base;
+    if (size != 0 && n > (SIZE_MAX - SYS_DEVICE_ALIGN - DEVICE_HEADER) / size)
+        return NULL;
+    bytes = n * size;
+    /* calloc: a large array comes zeroed from fresh pages, untouched until written */
+    base = calloc(1, bytes + SYS_DEVICE_ALIGN + DEVICE_HEADER);
+    return base ? device_header(device_start(base), base, bytes) : NULL;
+}
+
+void *sys_device_realloc(void *p, size_t n, size_t size)
+{
+    char *old_base, *base, *q;
+    size_t old_bytes, bytes, off;
+    if (!p)
+        return sys_device_calloc(n, size);
+    if (size != 0 && n > (SIZE_MAX - SYS_DEVICE_ALIGN - DEVICE_HEADER) / size)
+        return NULL;
+    bytes = n * size;
+    memcpy(&old_base, (char *)p - DEVICE_HEADER, sizeof old_base);
+    memcpy(&old_bytes, (char *)p - sizeof(size_t), sizeof old_bytes);
+    off = (size_t)((char *)p - old_base);
+    base = realloc(old_base, bytes + SYS_DEVICE_ALIGN + DEVICE_HEADER);
+    if (!base)
+        return NULL;
+    q = device_start(base);
+    /* realloc kept the bytes from base on; the array moves if its aligned start did (and
+     * only then is the header written: it may lie where the old array began) */
+    if ((size_t)(q - base) != off)
+        memmove(q, base + off, old_bytes < bytes ? old_bytes : bytes);
+    return device_header(q, base, bytes);
+}
+
+void sys_device_free(void *p)
+{
+    char *base;
+    if (!p)
+        return;
+    memcpy(&base, (char *)p - DEVICE_HEADER, sizeof base);
+    free(base);
+}
+
 void sys_release(void *p, size_t len)
 {
 #if defined(__linux__) && defined(MADV_DONTNEED)

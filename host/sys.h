@@ -26,6 +26,19 @@ unsigned long long sys_mem_available(void);
  * happens. */
 void sys_release(void *p, size_t len);
 
+/* Memory for a scene array that a CPU OpenCL device may use where it is, without a copy
+ * (CL_MEM_USE_HOST_PTR: host/render.c): zeroed like calloc, its start aligned to
+ * SYS_DEVICE_ALIGN bytes (a page: what CPU runtimes ask for such a buffer, and whole cache
+ * lines for the nodes and blocks the walks read). NULL when out of memory or when n * size
+ * overflows. Free only with sys_device_free; resize only with sys_device_realloc. */
+#define SYS_DEVICE_ALIGN 4096
+void *sys_device_calloc(size_t n, size_t size);
+/* Resizes p (from sys_device_calloc or this; NULL: a new zeroed array) to n * size bytes,
+ * keeping the content up to the smaller size and the alignment; a larger array's new part
+ * is not zeroed. NULL when out of memory (p is then left as it was) or on overflow. */
+void *sys_device_realloc(void *p, size_t n, size_t size);
+void sys_device_free(void *p);
+
 /* Ends the process now with status: flushes stdout and stderr, then _exit (no atexit
  * handlers or library destructors run, nothing is freed). */
 void sys_exit_now(int status);

@@ -301,6 +301,8 @@ check_grep "--stats: device" "^device: .*, [0-9]* compute units\{0,1\}, \(pixel\
 check_grep "--stats: what the scene uploaded" "^scene: 5 spheres, 1 triangle, 2 polygons, 0 cones; 0 instances of 0 meshes; BVH [0-9]* nodes$" "$T/out"
 check_grep "--stats: phase times" "^time: parse [0-9.]* s, build [0-9.]* s, compile [0-9.]* s, upload [0-9.]* s, trace [0-9.]* s ([0-9]* passes), first launch [0-9.]* s$" "$T/out"
 check_grep "--stats: fixed costs" "^fixed: opencl [0-9.]* s (beside the parse), write [0-9.]* s$" "$T/out"
+# on PoCL's CPU device the scene arrays are the buffers' memory: nothing of them is copied
+check_grep "--stats: the scene arrays used in place" "^upload: 0\.0*[1-9][0-9]* MB of scene arrays used in place, 0\.[0-9]* MB copied$" "$T/out"
 check_true "no progress bar when stderr is a file" test ! -s "$T/err"
 # --repeat 3: the summary, then one line with the three renders' times, their least and median;
 # the image is the one a single render writes

@@ -1720,7 +1720,11 @@ static void test_spd(void **state)
 
 /* Scenes whose arrays are uploaded in pieces of 100 bytes, of a page and a bit, and of
  * 64 KiB and a bit (each piece's memory given back once uploaded, pieces not aligned to
- * pages) render the image of the whole-array upload, bit for bit. */
+ * pages) render the image of the whole-array upload, bit for bit. On a CPU device (PoCL
+ * here) the whole-array upload is no upload: the buffers use the scene arrays where the
+ * host built them (render.c, upload_in_place), which the test hook of pieces turns off; so
+ * this also checks that images are the same both ways, and that nothing of the scene arrays
+ * was copied in the first and all of them in the second. */
 static void test_upload_pieces(void **state)
 {
     static const char *const scenes[] = {
@@ -1730,6 +1734,8 @@ static void test_upload_pieces(void **state)
         "tests/scenes/origin/far.nff",
     };
     static const size_t pieces[] = {100, 4096 + 12, 65536 + 20};
+    render_stats st;
+    unsigned long long in_place, copied;
     (void)state;
     renderer_debug_world_origin(R, 0);
     settings(0, 0, RENDER_ROBUST);
@@ -1743,20 +1749,33 @@ static void test_upload_pieces(void **state)
             renderer_set_scene(R, &sc, err, sizeof err) != 0 ||
             renderer_render(R, &whole, err, sizeof err) != 0)
             fail_msg("%s: %s", scenes[si], err);
+        renderer_get_stats(R, &st);
+        if (st.upload_in_place == 0)
+            fail_msg("%s: no scene array used in place on PoCL's CPU device (%llu bytes copied)",
+                     scenes[si], st.upload_copied);
+        in_place = st.upload_in_place;
+        copied = st.upload_copied;
         for (size_t k = 0; k < sizeof pieces / sizeof pieces[0]; k++) {
             image got = {0, 0, NULL};
             renderer_debug_upload_piece(R, pieces[k]);
             if (renderer_set_scene(R, &sc, err, sizeof err) != 0 ||
                 renderer_render(R, &got, err, sizeof err) != 0)
                 fail_msg("%s, pieces of %zu bytes: %s", scenes[si], pieces[k], err);
+            renderer_get_stats(R, &st);
+            if (st.upload_in_place != 0 || st.upload_copied != in_place + copied)
+                fail_msg("%s, pieces of %zu bytes: %llu bytes in place and %llu copied, not 0 "
+                         "and %llu",
+                         scenes[si], pieces[k], st.upload_in_place, st.upload_copied,
+                         in_place + copied);
             if (got.width != whole.width || got.height != whole.height ||
                 memcmp(got.rgb, whole.rgb, (size_t)got.width * got.height * 3 * sizeof(float)))
                 fail_msg("%s: uploaded in pieces of %zu bytes, another image", scenes[si],
                          pieces[k]);
             image_free(&got);
         }
-        printf("  %s: the same image uploaded whole and in pieces of %zu, %zu and %zu bytes\n",
-               scenes[si], pieces[0], pieces[1], pieces[2]);
+        printf("  %s: the same image with the arrays in place (%llu bytes) and uploaded in "
+               "pieces of %zu, %zu and %zu bytes\n",
+               scenes[si], in_place, pieces[0], pieces[1], pieces[2]);
         image_free(&whole);
         scene_free(&sc);
     }
