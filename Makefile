@@ -233,7 +233,7 @@ $(BUILD)/cldevices: tools/cldevices.c $(LIB) | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) -lOpenCL -o $@
 
 $(BUILD)/oclgrind-fill-shim.so: tools/oclgrind-fill-shim.c | $(BUILD)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -shared $< -o $@
+	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -shared $< -o $@ -ldl
 
 portability: portability-tools
 	bash tools/portability-check --self-test
