@@ -1,6 +1,7 @@
 /* Tests for the kernel cache's header (host/progcache.c) and for what host/sys.c does so
  * that nothing is left behind: temporary names within NAME_MAX, permission bits kept, the
- * output check, escaping, and the signal handler removing temporary files (in a child). */
+ * output check, escaping, and the signal handler removing temporary files (in a child); and
+ * the page-aligned scene arrays a CPU device uses in place (sys_device_calloc). */
 #include "testutil.h"
 
 #include "progcache.h"
@@ -184,12 +185,55 @@ static void test_signal_cleanup(void **state)
     rmdir(dir);
 }
 
+/* Scene arrays for a device to use in place: page-aligned, zeroed; resized up and down with
+ * other allocations in between (so that realloc moves them, and their aligned start moves
+ * within the new block) their content is kept and their start stays aligned. */
+static void test_device_arrays(void **state)
+{
+    enum { ROUNDS = 64 };
+    size_t sizes[] = {1, 4095, 4096, 70000, 3 << 20, 100, 1 << 20, 12};
+    void *other[ROUNDS] = {NULL};
+    unsigned char *p = sys_device_calloc(10, 3), *q;
+    size_t n = 30, i, k, moves = 0;
+    (void)state;
+    assert_non_null(p);
+    assert_int_equal((uintptr_t)p % SYS_DEVICE_ALIGN, 0);
+    for (i = 0; i < n; i++)
+        assert_int_equal(p[i], 0);
+    for (i = 0; i < n; i++)
+        p[i] = (unsigned char)(i * 13 + 1);
+    for (k = 0; k < ROUNDS; k++) {
+        size_t m = sizes[k % (sizeof sizes / sizeof sizes[0])] + k;
+        other[k] = malloc(k * 977 + 1); /* the heap changes between resizes */
+        q = sys_device_realloc(p, m, 1);
+        assert_non_null(q);
+        assert_int_equal((uintptr_t)q % SYS_DEVICE_ALIGN, 0);
+        moves += q != p;
+        for (i = 0; i < (n < m ? n : m); i++)
+            if (q[i] != (unsigned char)(i * 13 + 1))
+                fail_msg("round %zu: byte %zu of %zu changed in a resize to %zu", k, i, n, m);
+        for (i = n; i < m; i++) /* the new part: written like the rest */
+            q[i] = (unsigned char)(i * 13 + 1);
+        p = q;
+        n = m;
+    }
+    printf("  %d resizes (%zu moved the array), content and alignment kept\n", ROUNDS, moves);
+    assert_true(moves > 0);
+    assert_null(sys_device_calloc((size_t)-1 / 2, 4)); /* overflow */
+    assert_null(sys_device_realloc(p, (size_t)-1 / 2, 4));
+    assert_int_equal(p[0], 1); /* a failed resize leaves the array as it was */
+    sys_device_free(p);
+    sys_device_free(NULL);
+    for (k = 0; k < ROUNDS; k++)
+        free(other[k]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cache_header),   cmocka_unit_test(test_tmp_name_max),
         cmocka_unit_test(test_output_check),   cmocka_unit_test(test_escape),
-        cmocka_unit_test(test_signal_cleanup),
+        cmocka_unit_test(test_signal_cleanup), cmocka_unit_test(test_device_arrays),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
