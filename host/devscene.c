@@ -595,7 +595,8 @@ int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
             snprintf(err, errlen, "out of memory for the BVH");
             return -1;
         }
-        memcpy(grown, ds->tree.refs, (size_t)ds->tree.num_refs * sizeof *ds->refs);
+        if (ds->tree.num_refs > 0) /* an empty scene's tree has no array */
+            memcpy(grown, ds->tree.refs, (size_t)ds->tree.num_refs * sizeof *ds->refs);
         free(ds->tree.refs);
         ds->refs = grown;
         ds->tree.refs = NULL;
