@@ -42,25 +42,12 @@ void devscene_world_arrays(const devscene *ds, devscene_world *w)
 #undef DEVSCENE_SET
 }
 
-void devscene_free_array(devscene *ds, int which)
+void *devscene_take_array(devscene *ds, int which)
 {
-#define DEVSCENE_FREE(name, data, count)                                                           \
-    case CW_WORLD_ARG_##name:                                                                      \
-        sys_device_free(data);                                                                     \
-        data = NULL;                                                                               \
-        break;
-    switch (which) {
-        DEVSCENE_ARRAYS(DEVSCENE_FREE)
-    default:
-        break;
-    }
-#undef DEVSCENE_FREE
-}
-
-void devscene_take_array(devscene *ds, int which)
-{
+    void *taken = NULL;
 #define DEVSCENE_TAKE(name, data, count)                                                           \
     case CW_WORLD_ARG_##name:                                                                      \
+        taken = data;                                                                              \
         data = NULL;                                                                               \
         break;
     switch (which) {
@@ -69,6 +56,12 @@ void devscene_take_array(devscene *ds, int which)
         break;
     }
 #undef DEVSCENE_TAKE
+    return taken;
+}
+
+void devscene_free_array(devscene *ds, int which)
+{
+    sys_device_free(devscene_take_array(ds, which));
 }
 
 cw_float4 devscene_f4(vec3f v, float w)
@@ -103,22 +96,16 @@ static void find_materials(const scene *s, devscene *ft)
 
 void devscene_free(devscene *ds)
 {
-    sys_device_free(ds->sph);
-    sys_device_free(ds->sph_mat);
-    sys_device_free(ds->tri);
-    sys_device_free(ds->tri_blocks);
-    sys_device_free(ds->sph_blocks);
-    sys_device_free(ds->normals);
-    sys_device_free(ds->pg);
-    sys_device_free(ds->verts);
-    sys_device_free(ds->bands);
-    sys_device_free(ds->cones);
+    /* the kernels' arrays, from the one list (the wide nodes too: bvhw_free finds none) */
+#define DEVSCENE_FREE(name, data, count)                                                           \
+    sys_device_free(data);                                                                         \
+    data = NULL;
+    DEVSCENE_ARRAYS(DEVSCENE_FREE)
+#undef DEVSCENE_FREE
     free(ds->lights);
     free(ds->mats);
     free(ds->boxes);
     free(ds->box_ref);
-    sys_device_free(ds->refs);
-    sys_device_free(ds->inst);
     free(ds->meshes);
     free(ds->mesh_boxes);
     free(ds->mesh_box_ref);

@@ -77,9 +77,9 @@ void devscene_world_arrays(const devscene *ds, devscene_world *w);
 void devscene_free_array(devscene *ds, int which);
 
 /* Hands over the host array behind kernel buffer `which` (a cw_world_arg): ds forgets it
- * without freeing it, and the new owner frees it with sys_device_free (every such array
- * comes from sys_device_calloc); the counts stay. */
-void devscene_take_array(devscene *ds, int which);
+ * without freeing it and returns it; the new owner frees it with sys_device_free (every
+ * such array comes from sys_device_calloc). The counts stay. */
+void *devscene_take_array(devscene *ds, int which);
 
 cw_float4 devscene_f4(vec3f v, float w);
 

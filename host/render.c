@@ -278,19 +278,20 @@ static void CL_CALLBACK free_device_array(cl_mem m, void *array)
     sys_device_free(array);
 }
 
-/* A scene array of `bytes` (> 0) from sys_device_calloc as the memory of its buffer, where
+/* A scene array of `bytes` from sys_device_calloc as the memory of its buffer, where
  * the device is a CPU one: CL_MEM_USE_HOST_PTR, so that the device reads the array where
  * the host built it, with no copy and no second set of pages to fault in (1M random
  * triangles: 124 MB not copied, 27,000 page faults fewer, the upload's 0.09 s gone). The buffer
  * then owns the array: it is freed when the buffer is destroyed. Returns 1 when the buffer was made
  * so (the caller must forget the array), 0 when the array is to be copied instead (another kind of
- * device, the test hook of upload pieces), -1 on error (the array is still the caller's). */
+ * device, the test hook of upload pieces, an empty array), -1 on error (the array is still the
+ * caller's). */
 static int upload_in_place(renderer *r, cl_mem *m, void *data, size_t bytes, const char *what,
                            char *err, size_t errlen)
 {
     char call[96];
     cl_int e;
-    if (!r->cpu || r->upload_piece || (uintptr_t)data % SYS_DEVICE_ALIGN != 0)
+    if (bytes == 0 || !r->cpu || r->upload_piece || (uintptr_t)data % SYS_DEVICE_ALIGN != 0)
         return 0;
     if (rpass_check_alloc(r, what, bytes, err, errlen) != 0)
         return -1;
@@ -320,15 +321,13 @@ static int upload_world(renderer *r, devscene *ds, char *err, size_t errlen)
     int in_place;
     devscene_world_arrays(ds, &a);
 #define UPLOAD_WORLD(type, name, what)                                                             \
-    in_place = a.n_##name == 0 ? 0                                                                 \
-                               : upload_in_place(r, &r->world.name, (void *)a.name,                \
-                                                 a.n_##name * sizeof(type), what, err, errlen);    \
-    if (in_place < 0)                                                                              \
+    in_place = upload_in_place(r, &r->world.name, (void *)a.name, a.n_##name * sizeof(type), what, \
+                               err, errlen);                                                       \
+    if (in_place < 0 || (!in_place && upload(r, &r->world.name, a.name, a.n_##name, sizeof(type),  \
+                                             1, what, err, errlen)))                               \
         return -1;                                                                                 \
     if (in_place)                                                                                  \
         devscene_take_array(ds, CW_WORLD_ARG_##name);                                              \
-    else if (upload(r, &r->world.name, a.name, a.n_##name, sizeof(type), 1, what, err, errlen))    \
-        return -1;                                                                                 \
     else                                                                                           \
         devscene_free_array(ds, CW_WORLD_ARG_##name);
     CW_WORLD_BUFFERS(UPLOAD_WORLD)
