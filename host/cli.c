@@ -104,6 +104,8 @@ static void usage(FILE *f)
 "  POCL_DEVICES             PoCL device drivers to offer, e.g. pthread or basic\n"
 "  POCL_MAX_PTHREAD_COUNT   threads of PoCL's pthread device (default: one a core;\n"
 "                           --threads sets it)\n"
+"  POCL_AFFINITY            1: PoCL's threads pinned one per CPU (default: 1 when\n"
+"                           they are one per CPU and the CPU set is not narrowed)\n"
 "  POCL_CACHE_DIR           PoCL's compiled-kernel cache (default:\n"
 "                           ~/.cache/pocl/kcache)\n"
 "  OCL_ICD_VENDORS          where the OpenCL loader finds drivers (default:\n"

@@ -50,6 +50,27 @@ static int cpu_count(void)
     return n < 1 ? 1 : n > 4096 ? 4096 : (int)n;
 }
 
+int sys_pin_covers_cpus(int threads)
+{
+#if defined(__linux__) && defined(CPU_COUNT)
+    cpu_set_t set;
+    long online = sysconf(_SC_NPROCESSORS_ONLN);
+    int i;
+    if (threads == 0)
+        threads = online > INT_MAX ? INT_MAX : (int)online;
+    if (threads < 1 || threads != online || threads > CPU_SETSIZE ||
+        sched_getaffinity(0, sizeof set, &set) != 0 || CPU_COUNT(&set) != threads)
+        return 0;
+    for (i = 0; i < threads; i++)
+        if (!CPU_ISSET(i, &set))
+            return 0;
+    return 1;
+#else
+    (void)threads;
+    return 0;
+#endif
+}
+
 unsigned long long sys_mem_available(void)
 {
     char line[256];

@@ -15,6 +15,12 @@ double sys_now(void);
 int sys_cpu_count(void);
 /* Caps what sys_cpu_count returns at n (n >= 1; --threads); n <= 0 lifts the cap. */
 void sys_set_cpu_limit(int n);
+/* Whether `threads` threads (0: one per online CPU) pinned one per CPU, thread i to CPU i
+ * (PoCL's POCL_AFFINITY), would cover every online CPU and stay inside this process's
+ * affinity mask: 1 only when the threads are as many as the online CPUs, those are CPUs
+ * 0 .. threads - 1, and no taskset or cpuset has narrowed the mask; 0 otherwise and where
+ * there is no mask. */
+int sys_pin_covers_cpus(int threads);
 
 /* The memory available to a new allocation now, in bytes (MemAvailable of /proc/meminfo,
  * else the free pages); 0 when unknown. */

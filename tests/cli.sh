@@ -172,6 +172,37 @@ for n in 1 2; do
 done
 check_true "--threads 1 and 2: the same pixels" cmp -s "$T/t1.raw" "$T/t2.raw"
 
+# PoCL's threads are pinned one per CPU (POCL_AFFINITY=1, host/main.c) only where that covers
+# every CPU the process may use: the default here when nothing narrows this shell's CPUs;
+# never with fewer or more threads than CPUs (PoCL pins thread i to CPU i and aborts where
+# that CPU is missing), under a narrowed CPU set, or over the user's own POCL_AFFINITY
+NCPU=$(getconf _NPROCESSORS_ONLN)
+if [ "$(nproc)" = "$NCPU" ] && [ "$(cat /sys/devices/system/cpu/online)" = "0-$((NCPU - 1))" ]; then
+    want_pin="pinned one per CPU (POCL_AFFINITY=1)"
+elif [ "$NCPU" = 1 ] && [ "$(nproc)" = 1 ]; then
+    want_pin="pinned one per CPU (POCL_AFFINITY=1)"
+else
+    want_pin="not pinned (not one thread per CPU, or a narrowed CPU set)"
+fi
+"$BIN" --stats -W 8 -H 6 -o "$T/pin.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "default pinning" 0 $?
+check_grep "--stats: PoCL's threads $want_pin" "^threads: $want_pin$" "$T/out"
+POCL_MAX_PTHREAD_COUNT=$((NCPU + 1)) "$BIN" --stats -W 8 -H 6 -o "$T/pin.png" scenes/default.json \
+    >"$T/out" 2>"$T/err"
+check "more threads than CPUs: not pinned, no PoCL abort" 0 $?
+check_grep "more threads than CPUs: not pinned" "^threads: not pinned" "$T/out"
+POCL_AFFINITY=0 "$BIN" --stats -W 8 -H 6 -o "$T/pin.png" scenes/default.json >"$T/out" 2>"$T/err"
+check "the user's POCL_AFFINITY" 0 $?
+check_grep "the user's POCL_AFFINITY is left alone" "^threads: POCL_AFFINITY as the environment set it$" "$T/out"
+if [ "$NCPU" -gt 1 ]; then
+    "$BIN" --stats --threads 1 -W 8 -H 6 -o "$T/pin.png" scenes/default.json >"$T/out" 2>"$T/err"
+    check "--threads 1 of $NCPU CPUs" 0 $?
+    check_grep "--threads 1 of $NCPU CPUs: not pinned" "^threads: not pinned" "$T/out"
+    taskset -c 1 "$BIN" --stats -W 8 -H 6 -o "$T/pin.png" scenes/default.json >"$T/out" 2>"$T/err"
+    check "taskset -c 1: renders" 0 $?
+    check_grep "taskset -c 1: not pinned" "^threads: not pinned" "$T/out"
+fi
+
 # --crop on the command line: the window's pixels of the full render (tests/test_crop.c
 # checks every strategy and mode); the metadata names the crop
 "$BIN" -q -W 40 -H 30 -o "$T/full.exr" scenes/default.json >"$T/out" 2>"$T/err"; check "full render" 0 $?

@@ -228,12 +228,30 @@ static void test_device_arrays(void **state)
         free(other[k]);
 }
 
+/* Pinning PoCL's threads (POCL_AFFINITY) is allowed only for one thread per online CPU:
+ * never for more (PoCL would pin one to a CPU that is missing and abort) or fewer, and 0
+ * (PoCL's default, one per online CPU) answers as the online count does. */
+static void test_pin_covers_cpus(void **state)
+{
+    long online = sysconf(_SC_NPROCESSORS_ONLN);
+    (void)state;
+    assert_true(online >= 1);
+    assert_int_equal(sys_pin_covers_cpus((int)online + 1), 0);
+    assert_int_equal(sys_pin_covers_cpus(-1), 0);
+    if (online > 1)
+        assert_int_equal(sys_pin_covers_cpus((int)online - 1), 0);
+    assert_int_equal(sys_pin_covers_cpus(0), sys_pin_covers_cpus((int)online));
+    printf("  %ld online CPUs: pinning one thread per CPU %s\n", online,
+           sys_pin_covers_cpus(0) ? "covers them all" : "is left out (a narrowed CPU set)");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cache_header),   cmocka_unit_test(test_tmp_name_max),
-        cmocka_unit_test(test_output_check),   cmocka_unit_test(test_escape),
-        cmocka_unit_test(test_signal_cleanup), cmocka_unit_test(test_device_arrays),
+        cmocka_unit_test(test_cache_header),    cmocka_unit_test(test_tmp_name_max),
+        cmocka_unit_test(test_output_check),    cmocka_unit_test(test_escape),
+        cmocka_unit_test(test_signal_cleanup),  cmocka_unit_test(test_device_arrays),
+        cmocka_unit_test(test_pin_covers_cpus),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
