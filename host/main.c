@@ -12,6 +12,7 @@
 
 #include "batch.h"
 #include "cli.h"
+#include "cli_num.h"
 #include "image.h"
 #include "preview.h"
 #include "progress.h"
@@ -426,13 +427,8 @@ static int pin_threads(void)
         pin_note = "POCL_AFFINITY as the environment set it";
         return 0;
     }
-    if (count && *count) {
-        char *end;
-        errno = 0;
-        n = strtol(count, &end, 10);
-        if (errno != 0 || *end != '\0' || n < 1 || n > INT_MAX)
-            n = -1; /* PoCL's own reading of it is not ours to guess */
-    }
+    if (count && *count && cli_parse_long(count, 1, INT_MAX, &n) != 0)
+        n = -1; /* PoCL's own reading of it is not ours to guess */
     if (!sys_pin_covers_cpus((int)n)) {
         pin_note = "not pinned (not one thread per CPU, or a narrowed CPU set)";
         return 0;

@@ -59,9 +59,9 @@ CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo 
  * and children, then starts with the loads of its planes instead of after the test
  * (1M and 4M random triangles: 4-5% faster). */
 
-/* An interior child c, entered at distance e, met by a closest-hit walk in a node where n
- * interior children came before it: the nearest of them stays in *near (entered at
- * *near_t), the other one goes on the stack with its entry distance. They are not sorted:
+/* An interior child c, entered at distance e, met by a closest-hit walk: the nearest of a
+ * node's interior children so far stays in *near (entered at *near_t; -1: none yet), the
+ * other one goes on the stack with its entry distance. They are not sorted:
  * a node's stacked children come off in the reverse of their lane order, each skipped when a
  * closer hit has been found by then. Sorting them nearest first by insertion visited 3% fewer
  * nodes and tests on 1M random triangles but mispredicted more branches (cachegrind on 100k
@@ -69,10 +69,10 @@ CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo 
  * the time (five sets of 8-10 rounds: 1M triangles; teapot and balls at 1024x1024), each set
  * within this machine's noise, none slower. 1M triangles, teapot, rings, tree: the same
  * images bit for bit. */
-CW_INLINE void bvh_near(int *stack, float *stack_t, int *sp, int *near, float *near_t, int n, int c,
+CW_INLINE void bvh_near(int *stack, float *stack_t, int *sp, int *near, float *near_t, int c,
                         float e)
 {
-    if (n == 0) {
+    if (*near < 0) {
         *near = c;
         *near_t = e;
     } else if (e < *near_t) {
@@ -86,13 +86,13 @@ CW_INLINE void bvh_near(int *stack, float *stack_t, int *sp, int *near, float *n
     }
 }
 
-/* After a node of a closest-hit walk: its nearest interior child (near, when it had any: n >
- * 0) if entered before t_best, else the next stacked node still entered before t_best; -1
- * when the stack runs out. */
+/* After a node of a closest-hit walk: its nearest interior child (near; -1 when it had none)
+ * if entered before t_best, else the next stacked node still entered before t_best; -1 when
+ * the stack runs out. */
 CW_INLINE int bvh_next(const int *stack, const float *stack_t, int *sp, int near, float near_t,
-                       int n, float t_best)
+                       float t_best)
 {
-    if (n > 0 && near_t <= t_best)
+    if (near >= 0 && near_t <= t_best)
         return near;
     for (;;) {
         if (*sp == 0)
@@ -219,7 +219,7 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
     int sp = 0, node = root, i, k;
     for (;;) {
         CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[node];
-        int near = -1, n = 0;
+        int near = -1;
         float near_t = 0.0f, enter[CW_BVH_WIDTH];
         unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, ri, tmin, *t_best, enter);
@@ -229,7 +229,7 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
             i = cw_ctz(mask);
             mask &= mask - 1u;
             if (inner >> i & 1u) {
-                bvh_near(stack, stack_t, &sp, &near, &near_t, n++, nd->child[i], enter[i]);
+                bvh_near(stack, stack_t, &sp, &near, &near_t, nd->child[i], enter[i]);
                 continue;
             }
             count = nd->count[i];
@@ -245,7 +245,7 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
                 bvh_closest_leaf_blocks(w, nd->child[i], count, ri, tmin, skip, t_best, hit);
             }
         }
-        node = bvh_next(stack, stack_t, &sp, near, near_t, n, *t_best);
+        node = bvh_next(stack, stack_t, &sp, near, near_t, *t_best);
         if (node < 0)
             return;
     }
@@ -331,7 +331,7 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
     }
     for (;;) {
         CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[node];
-        int near = -1, n = 0;
+        int near = -1;
         float near_t = 0.0f, enter[CW_BVH_WIDTH];
         unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, &ri, tmin, t_best, enter);
@@ -341,7 +341,7 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
             i = cw_ctz(mask);
             mask &= mask - 1u;
             if (inner >> i & 1u) {
-                bvh_near(stack, stack_t, &sp, &near, &near_t, n++, nd->child[i], enter[i]);
+                bvh_near(stack, stack_t, &sp, &near, &near_t, nd->child[i], enter[i]);
                 continue;
             }
             count = nd->count[i];
@@ -367,7 +367,7 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
 #endif
             }
         }
-        node = bvh_next(stack, stack_t, &sp, near, near_t, n, t_best); /* down the nearest */
+        node = bvh_next(stack, stack_t, &sp, near, near_t, t_best); /* down the nearest */
         if (node < 0) {
             *out = hit;
             return;

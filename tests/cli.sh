@@ -177,9 +177,8 @@ check_true "--threads 1 and 2: the same pixels" cmp -s "$T/t1.raw" "$T/t2.raw"
 # never with fewer or more threads than CPUs (PoCL pins thread i to CPU i and aborts where
 # that CPU is missing), under a narrowed CPU set, or over the user's own POCL_AFFINITY
 NCPU=$(getconf _NPROCESSORS_ONLN)
-if [ "$(nproc)" = "$NCPU" ] && [ "$(cat /sys/devices/system/cpu/online)" = "0-$((NCPU - 1))" ]; then
-    want_pin="pinned one per CPU (POCL_AFFINITY=1)"
-elif [ "$NCPU" = 1 ] && [ "$(nproc)" = 1 ]; then
+if [ "$NCPU" = 1 ]; then all_cpus=0; else all_cpus="0-$((NCPU - 1))"; fi
+if [ "$(nproc)" = "$NCPU" ] && [ "$(cat /sys/devices/system/cpu/online)" = "$all_cpus" ]; then
     want_pin="pinned one per CPU (POCL_AFFINITY=1)"
 else
     want_pin="not pinned (not one thread per CPU, or a narrowed CPU set)"
