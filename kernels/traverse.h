@@ -54,6 +54,19 @@ CW_INLINE unsigned bvh_boxes(CW_GLOBAL const cw_bvhw_node *nd, const cw_rayinfo 
     return vl_le_mask(te, tx);
 }
 
+/* Whether a child lane entered at e (bvh_boxes' enter[]) is still entered once a closest-hit
+ * walk has lowered its best distance to t_best: the box test's own comparison, redone with
+ * tmax = t_best (widened the same way on the robust path). A closest walk asks before each
+ * leaf test: a leaf of the same node, tested before it in lane order, may have found a hit
+ * in front of it (1M random triangles: 4.61 -> 4.37 tests per ray, the same image). */
+CW_INLINE int bvh_entered(float e, float t_best)
+{
+#if !CW_FAST
+    t_best *= 1.0000004f;
+#endif
+    return e <= t_best;
+}
+
 /* Each walk below reads a node's interior lanes as one mask (vl_zero_mask of its counts)
  * before its box test: the load of the node's last cache line, which holds the counts
  * and children, then starts with the loads of its planes instead of after the test
@@ -232,6 +245,8 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
                 bvh_near(stack, stack_t, &sp, &near, &near_t, nd->child[i], enter[i]);
                 continue;
             }
+            if (!bvh_entered(enter[i], *t_best))
+                continue;
             count = nd->count[i];
             if (count > 0) {
                 for (k = nd->child[i]; k < nd->child[i] + count; k++) {
@@ -303,7 +318,8 @@ CW_INLINE void bvh_instance_closest(const cw_world *w, int k, vec3 o, vec3 d, fl
 
 /* Closest hit in (tmin, tmax), never the primitive skip - 1 (skip = 0: none) of instance
  * skip_inst - 1 (skip_inst = 0: of the world), written to *out. Leaf children are tested as
- * they are found (in lane order); the nearest interior child is visited next, the others
+ * they are found (in lane order), each unless a hit found by then lies in front of it
+ * (bvh_entered); the nearest interior child is visited next, the others
  * stacked with their entry distance (bvh_near) and skipped when a closer hit has been found
  * by the time they come off the stack. An instance's leaf entry walks its mesh's tree at once
  * (bvh_instance_closest). (*out is private memory: the hit is written through a pointer
@@ -344,6 +360,8 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
                 bvh_near(stack, stack_t, &sp, &near, &near_t, nd->child[i], enter[i]);
                 continue;
             }
+            if (!bvh_entered(enter[i], t_best))
+                continue;
             count = nd->count[i];
             if (count > 0) {
                 for (k = nd->child[i]; k < nd->child[i] + count; k++) {
