@@ -116,6 +116,32 @@ CW_INLINE int bvh_next(const int *stack, const float *stack_t, int *sp, int near
     }
 }
 
+/* An interior child c met by an any-hit walk: the last one met in a node (*next; -1: none
+ * yet) is walked next straight from a register, and each earlier one goes on the stack, in
+ * the order the walk used to pop them: the same walk, without a store and load of the next
+ * node on its way from one node to the next (Embree's any-hit walk does the same). The slot
+ * at *sp is written either way, without a branch, so an any walk's stack has one entry
+ * more than the host checks its tree needs. Paired renders of 1M random triangles: 0.951,
+ * 0.996 and 0.984 of the time in sets of 12, 12 and 30 rounds (faster in 33 of 54); 4M
+ * 0.975 (8 rounds). */
+CW_INLINE void bvh_any_push(int *stack, int *sp, int *next, int c)
+{
+    stack[*sp] = *next;
+    *sp += *next >= 0;
+    *next = c;
+}
+
+/* After a node of an any-hit walk: its last interior child met (next; -1: none), else the
+ * top of the stack; -1 when the stack is empty. */
+CW_INLINE int bvh_any_next(const int *stack, int *sp, int next)
+{
+    if (next >= 0)
+        return next;
+    if (*sp == 0)
+        return -1;
+    return stack[--*sp];
+}
+
 /* A shadow cache entry (Haines and Greenberg's light buffer, cut down to one leaf test):
  * what blocked the last shadow ray toward one light, a test of one or two blocks of four
  * triangles or spheres (tag BVH_OCC_TRI4 or _SPH4, index: the first block, two: the next one
@@ -271,22 +297,22 @@ CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *r
 CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, float tmin,
                            float tmax, int skip)
 {
-    int stack[CW_BVH_STACK];
-    int sp = 0, i, k;
+    int stack[CW_BVH_STACK + 1]; /* one spare entry: bvh_any_push */
+    int sp = 0, node = root, i, k;
     bvh_occluder unused; /* an instance's occluder is not cached (bvh_any) */
-    stack[sp++] = root;
-    while (sp > 0) {
-        CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[stack[--sp]];
+    for (;;) {
+        CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[node];
         float enter[CW_BVH_WIDTH];
         unsigned inner = vl_zero_mask(nd->count);
         unsigned mask = bvh_boxes(nd, ri, tmin, tmax, enter);
+        int next = -1;
         BVH_COUNT(w, CW_COUNT_ANY_NODES, 1);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);
             mask &= mask - 1u;
             if (inner >> i & 1u) {
-                stack[sp++] = nd->child[i];
+                bvh_any_push(stack, &sp, &next, nd->child[i]);
                 continue;
             }
             count = nd->count[i];
@@ -299,8 +325,10 @@ CW_INLINE int bvh_mesh_any(const cw_world *w, int root, const cw_rayinfo *ri, fl
                     return 1;
             }
         }
+        node = bvh_any_next(stack, &sp, next);
+        if (node < 0)
+            return 0;
     }
-    return 0;
 }
 
 /* The closest hit in instance k's mesh (see bvh_mesh_closest), marked with its instance. */
@@ -419,30 +447,27 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
                       int skip_inst, bvh_occluder *oc)
 {
     cw_rayinfo ri = isect_rayinfo(o, d);
-    int stack[CW_BVH_STACK];
-    int sp = 0, node, i, k;
+    int stack[CW_BVH_STACK + 1]; /* one spare entry: bvh_any_push */
+    int sp = 0, node = 0, i, k;
     int wskip = skip_inst != 0 ? 0 : skip;
 
     if (w->num_nodes == 0)
         return 0;
     if (oc->tag != BVH_OCC_NONE && bvh_any_cached(w, oc, &ri, tmin, tmax, wskip))
         return 1;
-    stack[sp++] = 0;
-    while (sp > 0) {
-        CW_GLOBAL const cw_bvhw_node *nd;
+    for (;;) {
+        CW_GLOBAL const cw_bvhw_node *nd = &w->nodes[node];
         float enter[CW_BVH_WIDTH];
-        unsigned mask, inner;
-        node = stack[--sp];
-        nd = &w->nodes[node];
-        inner = vl_zero_mask(nd->count);
-        mask = bvh_boxes(nd, &ri, tmin, tmax, enter);
+        unsigned inner = vl_zero_mask(nd->count);
+        unsigned mask = bvh_boxes(nd, &ri, tmin, tmax, enter);
+        int next = -1;
         BVH_COUNT(w, CW_COUNT_ANY_NODES, 1);
         while (mask != 0u) {
             int count;
             i = cw_ctz(mask);
             mask &= mask - 1u;
             if (inner >> i & 1u) {
-                stack[sp++] = nd->child[i];
+                bvh_any_push(stack, &sp, &next, nd->child[i]);
                 continue;
             }
             count = nd->count[i];
@@ -472,9 +497,12 @@ CW_INLINE int bvh_any(const cw_world *w, vec3 o, vec3 d, float tmin, float tmax,
                 }
             }
         }
+        node = bvh_any_next(stack, &sp, next);
+        if (node < 0) {
+            oc->tag = BVH_OCC_NONE;
+            return 0;
+        }
     }
-    oc->tag = BVH_OCC_NONE;
-    return 0;
 }
 
 #endif
