@@ -19,6 +19,7 @@
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <time.h>
@@ -71,27 +72,110 @@ int sys_pin_covers_cpus(int threads)
 #endif
 }
 
+/* The first number after `key` on a line of file path (a /proc or /sys file), in *v; 0 when
+ * found. key "" reads the file's first line ("max" there is no number). */
+static int read_number(const char *path, const char *key, unsigned long long *v)
+{
+    char line[512];
+    size_t klen = strlen(key);
+    int found = -1;
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return -1;
+    while (found != 0 && fgets(line, sizeof line, f)) {
+        if (strncmp(line, key, klen) == 0 && sscanf(line + klen, " %llu", v) == 1)
+            found = 0;
+        if (klen == 0)
+            break;
+    }
+    fclose(f);
+    return found;
+}
+
+/* What a cgroup's memory limit leaves: the limit and the usage read from two files of the
+ * folder dir (below /sys/fs/cgroup) named by a line of /proc/self/cgroup; 0 when there is no
+ * limit ("max") or the files cannot be read. */
+static unsigned long long cgroup_files_left(const char *root, const char *dir, const char *limit,
+                                            const char *usage)
+{
+    char path[700];
+    unsigned long long max = 0, cur = 0;
+    snprintf(path, sizeof path, "/sys/fs/cgroup%s%s/%s", root, dir, limit);
+    if (read_number(path, "", &max) != 0 || max == 0)
+        return 0;
+    snprintf(path, sizeof path, "/sys/fs/cgroup%s%s/%s", root, dir, usage);
+    if (read_number(path, "", &cur) != 0)
+        return 0;
+    return cur < max ? max - cur : 1;
+}
+
+/* What the memory limits of this process's cgroups leave, in bytes: cgroup v2's memory.max
+ * less memory.current, v1's memory.limit_in_bytes less memory.usage_in_bytes (the least of
+ * those that are set); 0 when none is. */
+static unsigned long long cgroup_left(void)
+{
+    char line[512];
+    unsigned long long left = 0;
+    FILE *f = fopen("/proc/self/cgroup", "r");
+    if (!f)
+        return 0;
+    while (fgets(line, sizeof line, f)) { /* "id:controllers:path" */
+        char *ctl = strchr(line, ':'), *dir = ctl ? strchr(ctl + 1, ':') : NULL;
+        size_t n = strlen(line);
+        unsigned long long l = 0;
+        if (!dir || line[n - 1] != '\n')
+            continue;
+        line[n - 1] = '\0';
+        *dir++ = '\0';
+        ctl++;
+        if (strcmp(line, "0") == 0 && *ctl == '\0')
+            l = cgroup_files_left("", dir, "memory.max", "memory.current");
+        else if (strcmp(ctl, "memory") == 0)
+            l = cgroup_files_left("/memory", dir, "memory.limit_in_bytes", "memory.usage_in_bytes");
+        if (l != 0 && (left == 0 || l < left))
+            left = l;
+    }
+    fclose(f);
+    return left;
+}
+
+/* What the soft address-space limit (ulimit -v) leaves to map, in bytes; 0 when there is
+ * none or the process's size cannot be read. */
+static unsigned long long rlimit_left(void)
+{
+    struct rlimit rl;
+    unsigned long long kb = 0;
+    if (getrlimit(RLIMIT_AS, &rl) != 0 || rl.rlim_cur == RLIM_INFINITY)
+        return 0;
+    if (read_number("/proc/self/status", "VmSize:", &kb) != 0)
+        return 0;
+    return kb * 1024ULL < (unsigned long long)rl.rlim_cur
+               ? (unsigned long long)rl.rlim_cur - kb * 1024ULL
+               : 1;
+}
+
+static unsigned long long least_known(unsigned long long a, unsigned long long b)
+{
+    return a == 0 || (b != 0 && b < a) ? b : a;
+}
+
 unsigned long long sys_mem_available(void)
 {
-    char line[256];
-    unsigned long long kb = 0;
+    unsigned long long kb = 0, avail = 0;
     long pages, size;
-    FILE *f = fopen("/proc/meminfo", "r");
-    if (f) {
-        while (fgets(line, sizeof line, f))
-            if (sscanf(line, "MemAvailable: %llu kB", &kb) == 1)
-                break;
-        fclose(f);
-        if (kb > 0)
-            return kb * 1024ULL;
-    }
+    if (read_number("/proc/meminfo", "MemAvailable:", &kb) == 0 && kb > 0) {
+        avail = kb * 1024ULL;
+    } else {
 #ifdef _SC_AVPHYS_PAGES
-    pages = sysconf(_SC_AVPHYS_PAGES);
+        pages = sysconf(_SC_AVPHYS_PAGES);
 #else
-    pages = -1;
+        pages = -1;
 #endif
-    size = sysconf(_SC_PAGESIZE);
-    return pages > 0 && size > 0 ? (unsigned long long)pages * (unsigned long long)size : 0;
+        size = sysconf(_SC_PAGESIZE);
+        if (pages > 0 && size > 0)
+            avail = (unsigned long long)pages * (unsigned long long)size;
+    }
+    return least_known(least_known(avail, rlimit_left()), cgroup_left());
 }
 
 /* A device array's header, in the 16 bytes before its aligned start: the allocation it

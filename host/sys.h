@@ -22,8 +22,10 @@ void sys_set_cpu_limit(int n);
  * there is no mask. */
 int sys_pin_covers_cpus(int threads);
 
-/* The memory available to a new allocation now, in bytes (MemAvailable of /proc/meminfo,
- * else the free pages); 0 when unknown. */
+/* The memory available to a new allocation now, in bytes: MemAvailable of /proc/meminfo
+ * (else the free pages), or less where the address-space limit (ulimit -v, less the
+ * process's size) or the cgroup's memory limit (memory.max less memory.current, cgroup v2)
+ * leaves less; 0 when unknown. */
 unsigned long long sys_mem_available(void);
 
 /* Gives the memory of [p, p + len), part of an allocation whose content is no longer

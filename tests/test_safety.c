@@ -9,6 +9,7 @@
 
 #include <signal.h>
 #include <stdlib.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -231,6 +232,36 @@ static void test_device_arrays(void **state)
 /* Pinning PoCL's threads (POCL_AFFINITY) is allowed only for one thread per online CPU:
  * never for more (PoCL would pin one to a CPU that is missing and abort) or fewer, and 0
  * (PoCL's default, one per online CPU) answers as the online count does. */
+/* sys_mem_available counts the address-space limit (ulimit -v): with the soft limit set to
+ * the process's size plus 256 MiB it reports at most that much, then more again once the
+ * limit is lifted back. */
+static void test_mem_rlimit(void **state)
+{
+    struct rlimit saved, rl;
+    unsigned long long kb = 0, before, limited, after;
+    char line[256];
+    FILE *f = fopen("/proc/self/status", "r");
+    (void)state;
+    assert_non_null(f);
+    while (fgets(line, sizeof line, f))
+        if (sscanf(line, "VmSize: %llu kB", &kb) == 1)
+            break;
+    fclose(f);
+    assert_true(kb > 0);
+    assert_int_equal(getrlimit(RLIMIT_AS, &saved), 0);
+    before = sys_mem_available();
+    assert_true(before > (512ULL << 20)); /* this test needs a machine with more than that */
+    rl = saved;
+    rl.rlim_cur = (rlim_t)(kb * 1024ULL + (256ULL << 20));
+    assert_int_equal(setrlimit(RLIMIT_AS, &rl), 0);
+    limited = sys_mem_available();
+    assert_int_equal(setrlimit(RLIMIT_AS, &saved), 0);
+    after = sys_mem_available();
+    if (!(limited > 0 && limited <= (256ULL << 20)))
+        fail_msg("with 256 MiB of address space left: %llu bytes available", limited);
+    assert_true(after > (512ULL << 20));
+}
+
 static void test_pin_covers_cpus(void **state)
 {
     long online = sysconf(_SC_NPROCESSORS_ONLN);
@@ -251,7 +282,7 @@ int main(void)
         cmocka_unit_test(test_cache_header),    cmocka_unit_test(test_tmp_name_max),
         cmocka_unit_test(test_output_check),    cmocka_unit_test(test_escape),
         cmocka_unit_test(test_signal_cleanup),  cmocka_unit_test(test_device_arrays),
-        cmocka_unit_test(test_pin_covers_cpus),
+        cmocka_unit_test(test_pin_covers_cpus), cmocka_unit_test(test_mem_rlimit),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
