@@ -417,13 +417,26 @@ static int set_threads(int n)
  * 0.147 s unpinned, 0.140 s pinned (medians of 16 alternating runs). Left alone when the
  * user set POCL_AFFINITY, when the threads are not one per CPU (fewer: other processes may
  * want the other CPUs; more: PoCL pins thread i to CPU i and aborts where that CPU is
- * missing), and when a taskset or cpuset narrows the CPUs. clwhitted-mpi, whose ranks may
+ * missing), and when a taskset or cpuset narrows the CPUs; the user's POCL_AFFINITY with
+ * more threads than CPUs is refused (PoCL would abort). clwhitted-mpi, whose ranks may
  * share a node, never pins. Returns 0, or -1 after printing an error. */
 static int pin_threads(void)
 {
     const char *set = getenv("POCL_AFFINITY"), *count = getenv("POCL_MAX_PTHREAD_COUNT");
-    long n = 0;
+    long n = 0, online = sysconf(_SC_NPROCESSORS_ONLN);
     if (set) {
+        /* PoCL reads a value starting with 1 as on, and a count as atoi does: more threads
+         * than CPUs would abort it ("PTHREAD ERROR ... Invalid argument") at the first
+         * launch, so say so now instead */
+        long want = count ? atol(count) : 0;
+        if (set[0] == '1' && online > 0 && want > online) {
+            fprintf(stderr,
+                    "clwhitted: POCL_AFFINITY=%s pins PoCL's thread i to CPU i, and %ld threads "
+                    "(POCL_MAX_PTHREAD_COUNT or --threads) are more than the %ld CPUs here: use "
+                    "at most %ld threads or unset POCL_AFFINITY\n",
+                    set, want, online, online);
+            return -1;
+        }
         pin_note = "POCL_AFFINITY as the environment set it";
         return 0;
     }

@@ -190,6 +190,16 @@ POCL_MAX_PTHREAD_COUNT=$((NCPU + 1)) "$BIN" --stats -W 8 -H 6 -o "$T/pin.png" sc
     >"$T/out" 2>"$T/err"
 check "more threads than CPUs: not pinned, no PoCL abort" 0 $?
 check_grep "more threads than CPUs: not pinned" "^threads: not pinned" "$T/out"
+rm -f "$T/pin.png"
+POCL_AFFINITY=1 POCL_MAX_PTHREAD_COUNT=$((NCPU + 1)) "$BIN" -W 8 -H 6 -o "$T/pin.png" \
+    scenes/default.json >"$T/out" 2>"$T/err"
+check "the user's POCL_AFFINITY=1 with more threads than CPUs: an error, not PoCL's abort" 1 $?
+check_grep "POCL_AFFINITY=1 with more threads than CPUs: says why" \
+    "POCL_AFFINITY=1 pins PoCL's thread i to CPU i, and $((NCPU + 1)) threads .* more than the $NCPU CPUs here: use at most $NCPU threads or unset POCL_AFFINITY" "$T/err"
+check_true "POCL_AFFINITY=1 with more threads than CPUs: no image" [ ! -e "$T/pin.png" ]
+POCL_AFFINITY=1 "$BIN" --threads $((NCPU + 1)) -W 8 -H 6 -o "$T/pin.png" scenes/default.json \
+    >"$T/out" 2>"$T/err"
+check "the user's POCL_AFFINITY=1 with --threads above the CPUs: an error" 1 $?
 POCL_AFFINITY=0 "$BIN" --stats -W 8 -H 6 -o "$T/pin.png" scenes/default.json >"$T/out" 2>"$T/err"
 check "the user's POCL_AFFINITY" 0 $?
 check_grep "the user's POCL_AFFINITY is left alone" "^threads: POCL_AFFINITY as the environment set it$" "$T/out"
