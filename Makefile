@@ -235,9 +235,14 @@ $(BUILD)/cldevices: tools/cldevices.c $(LIB) | $(BUILD)
 $(BUILD)/oclgrind-fill-shim.so: tools/oclgrind-fill-shim.c | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -shared $< -o $@ -ldl
 
+# The bundle for another machine (tools/portability-bundle), made and run here on PoCL's
+# pthread device against its own reference images: it must hold all that the check needs.
 portability: portability-tools
 	bash tools/portability-check --self-test
 	bash tools/portability-check $(PORTABILITY_ARGS)
+	rm -rf $(BUILD)/portability-bundle $(BUILD)/portability-bundle-run
+	BUILD=$(abspath $(BUILD)) bash tools/portability-bundle --ci $(BUILD)/portability-bundle
+	$(BUILD)/portability-bundle/run --devices pocl-pthread --out $(abspath $(BUILD))/portability-bundle-run
 
 # --- Speed against error (tools/quality-report) ---
 # build/imgtool: the image tool (convert, diff, info; installed as clwhitted-imgtool), and
