@@ -423,12 +423,12 @@ static int set_threads(int n)
 static int pin_threads(void)
 {
     const char *set = getenv("POCL_AFFINITY"), *count = getenv("POCL_MAX_PTHREAD_COUNT");
-    long n = 0, online = sysconf(_SC_NPROCESSORS_ONLN);
+    long n = 0;
     if (set) {
         /* PoCL reads a value starting with 1 as on, and a count as atoi does: more threads
          * than CPUs would abort it ("PTHREAD ERROR ... Invalid argument") at the first
          * launch, so say so now instead */
-        long want = count ? atol(count) : 0;
+        long want = count ? atol(count) : 0, online = sysconf(_SC_NPROCESSORS_ONLN);
         if (set[0] == '1' && online > 0 && want > online) {
             fprintf(stderr,
                     "clwhitted: POCL_AFFINITY=%s pins PoCL's thread i to CPU i, and %ld threads "

@@ -22,9 +22,10 @@ void sys_set_cpu_limit(int n);
  * there is no mask. */
 int sys_pin_covers_cpus(int threads);
 
-/* The memory available to a new allocation now, in bytes: MemAvailable of /proc/meminfo
- * (else the free pages), or less where the address-space limit (ulimit -v, less the
- * process's size) or the cgroup's memory limit (memory.max less memory.current, cgroup v2)
+/* The memory available to a new allocation now, in bytes (sys_mem.c, as the device arrays
+ * and sys_release below): MemAvailable of /proc/meminfo (else the free pages), or less where
+ * the address-space limit (ulimit -v, less the process's size) or a cgroup's memory limit
+ * (v2 memory.max less memory.current, v1 memory.limit_in_bytes less memory.usage_in_bytes)
  * leaves less; 0 when unknown. */
 unsigned long long sys_mem_available(void);
 

@@ -232,6 +232,20 @@ static void test_device_arrays(void **state)
 /* Pinning PoCL's threads (POCL_AFFINITY) is allowed only for one thread per online CPU:
  * never for more (PoCL would pin one to a CPU that is missing and abort) or fewer, and 0
  * (PoCL's default, one per online CPU) answers as the online count does. */
+static void test_pin_covers_cpus(void **state)
+{
+    long online = sysconf(_SC_NPROCESSORS_ONLN);
+    (void)state;
+    assert_true(online >= 1);
+    assert_int_equal(sys_pin_covers_cpus((int)online + 1), 0);
+    assert_int_equal(sys_pin_covers_cpus(-1), 0);
+    if (online > 1)
+        assert_int_equal(sys_pin_covers_cpus((int)online - 1), 0);
+    assert_int_equal(sys_pin_covers_cpus(0), sys_pin_covers_cpus((int)online));
+    printf("  %ld online CPUs: pinning one thread per CPU %s\n", online,
+           sys_pin_covers_cpus(0) ? "covers them all" : "is left out (a narrowed CPU set)");
+}
+
 /* sys_mem_available counts the address-space limit (ulimit -v): with the soft limit set to
  * the process's size plus 256 MiB it reports at most that much, then more again once the
  * limit is lifted back. */
@@ -260,20 +274,6 @@ static void test_mem_rlimit(void **state)
     if (!(limited > 0 && limited <= (256ULL << 20)))
         fail_msg("with 256 MiB of address space left: %llu bytes available", limited);
     assert_true(after > (512ULL << 20));
-}
-
-static void test_pin_covers_cpus(void **state)
-{
-    long online = sysconf(_SC_NPROCESSORS_ONLN);
-    (void)state;
-    assert_true(online >= 1);
-    assert_int_equal(sys_pin_covers_cpus((int)online + 1), 0);
-    assert_int_equal(sys_pin_covers_cpus(-1), 0);
-    if (online > 1)
-        assert_int_equal(sys_pin_covers_cpus((int)online - 1), 0);
-    assert_int_equal(sys_pin_covers_cpus(0), sys_pin_covers_cpus((int)online));
-    printf("  %ld online CPUs: pinning one thread per CPU %s\n", online,
-           sys_pin_covers_cpus(0) ? "covers them all" : "is left out (a narrowed CPU set)");
 }
 
 int main(void)
