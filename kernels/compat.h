@@ -49,12 +49,22 @@ typedef int4 cw_lanes_int;
 #define cw_as_int(a) as_int(a)
 #define cw_as_float(a) as_float(a)
 #define cw_copysign(a, b) copysign((a), (b))
+/* c - a b: one fused multiply-add where the device has one (fma, rounded once; the host C
+ * version is fmaf too), else a product and a difference: never the software fma of a device
+ * without it. (OpenCL's mad would allow either, but PoCL builds it as the two operations under
+ * FP_CONTRACT OFF.) Written only where each operand is rounded the same way for every
+ * primitive that shares it: the robust triangle test's shear of a vertex. */
+#if defined(FP_FAST_FMAF) || defined(__FMA__)
+#define cw_nmad(a, b, c) fma(-(a), (b), (c))
+#else
+#define cw_nmad(a, b, c) (-(a) * (b) + (c))
+#endif
 #define CW_INFINITY INFINITY
 /* the index of the lowest set bit of x (x != 0); OpenCL 1.2 has clz but not ctz */
 #define cw_ctz(x) (31 - (int)clz((x) & (0u - (x))))
 
 /* The robust path relies on a*b - c*d being computed the same way for both triangles of
- * a shared edge: no fused multiply-add contraction. */
+ * a shared edge: no fused multiply-add contraction (cw_nmad fuses where asked). */
 #pragma OPENCL FP_CONTRACT OFF
 
 /* Atomic float add through compare-and-swap on the bits (OpenCL 1.2 has no float
@@ -135,6 +145,7 @@ CW_INLINE float cw_as_float(int i)
     return u.f;
 }
 #define cw_copysign(a, b) copysignf((a), (b))
+#define cw_nmad(a, b, c) fmaf(-(a), (b), (c))
 #define CW_INFINITY INFINITY
 #define cw_ctz(x) __builtin_ctz(x)
 CW_INLINE void cw_atomic_add(float *p, float v)

@@ -133,7 +133,11 @@ CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b
  * edge function value (negated) from both triangles, so a ray never passes between
  * them; zero counts as inside for both. No determinant epsilon: only an exactly
  * degenerate projection (det = 0: a degenerate triangle or a ray in its plane) misses.
- * (u, v): the barycentric weights of p1 and p2. */
+ * (u, v): the barycentric weights of p1 and p2. The shear of each vertex is one fused
+ * multiply-add (cw_nmad) where the device has it: a function of the vertex and the ray
+ * alone, so a shared vertex is moved to the same point for both of its triangles and the
+ * test stays watertight (1M random triangles: 0.9% fewer kernel instructions, 8 pixels of
+ * 262144 moved by a sub-pixel decision). */
 CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo *ri, float tmin,
                              float tmax, float *t_out, float *u_out, float *v_out)
 {
@@ -142,12 +146,12 @@ CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo 
     CW_GLOBAL const float *p2 = (CW_GLOBAL const float *)&tri->p2;
     int kx = ri->kx, ky = ri->ky, kz = ri->kz;
     float az = p0[kz] - ri->oz, bz = p1[kz] - ri->oz, cz = p2[kz] - ri->oz;
-    float ax = (p0[kx] - ri->ox) - ri->sx * az;
-    float ay = (p0[ky] - ri->oy) - ri->sy * az;
-    float bx = (p1[kx] - ri->ox) - ri->sx * bz;
-    float by = (p1[ky] - ri->oy) - ri->sy * bz;
-    float cx = (p2[kx] - ri->ox) - ri->sx * cz;
-    float cy = (p2[ky] - ri->oy) - ri->sy * cz;
+    float ax = cw_nmad(ri->sx, az, p0[kx] - ri->ox);
+    float ay = cw_nmad(ri->sy, az, p0[ky] - ri->oy);
+    float bx = cw_nmad(ri->sx, bz, p1[kx] - ri->ox);
+    float by = cw_nmad(ri->sy, bz, p1[ky] - ri->oy);
+    float cx = cw_nmad(ri->sx, cz, p2[kx] - ri->ox);
+    float cy = cw_nmad(ri->sy, cz, p2[ky] - ri->oy);
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
@@ -186,19 +190,22 @@ CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b
     cw_float8 sx = v8_splat(ri->sx), sy = v8_splat(ri->sy), sz = v8_splat(ri->sz);
     cw_float8 az = v8_sub(tri8_coord(b0, b1, kz), oz), bz = v8_sub(tri8_coord(b0, b1, 3 + kz), oz);
     cw_float8 cz = v8_sub(tri8_coord(b0, b1, 6 + kz), oz);
-    cw_float8 ax = v8_sub(v8_sub(tri8_coord(b0, b1, kx), ox), v8_mul(sx, az));
-    cw_float8 ay = v8_sub(v8_sub(tri8_coord(b0, b1, ky), oy), v8_mul(sy, az));
-    cw_float8 bx = v8_sub(v8_sub(tri8_coord(b0, b1, 3 + kx), ox), v8_mul(sx, bz));
-    cw_float8 by = v8_sub(v8_sub(tri8_coord(b0, b1, 3 + ky), oy), v8_mul(sy, bz));
-    cw_float8 cx = v8_sub(v8_sub(tri8_coord(b0, b1, 6 + kx), ox), v8_mul(sx, cz));
-    cw_float8 cy = v8_sub(v8_sub(tri8_coord(b0, b1, 6 + ky), oy), v8_mul(sy, cz));
+    cw_float8 ax = v8_nmad(sx, az, v8_sub(tri8_coord(b0, b1, kx), ox));
+    cw_float8 ay = v8_nmad(sy, az, v8_sub(tri8_coord(b0, b1, ky), oy));
+    cw_float8 bx = v8_nmad(sx, bz, v8_sub(tri8_coord(b0, b1, 3 + kx), ox));
+    cw_float8 by = v8_nmad(sy, bz, v8_sub(tri8_coord(b0, b1, 3 + ky), oy));
+    cw_float8 cx = v8_nmad(sx, cz, v8_sub(tri8_coord(b0, b1, 6 + kx), ox));
+    cw_float8 cy = v8_nmad(sy, cz, v8_sub(tri8_coord(b0, b1, 6 + ky), oy));
     cw_float8 u = v8_sub(v8_mul(cx, by), v8_mul(cy, bx));
     cw_float8 v = v8_sub(v8_mul(ax, cy), v8_mul(ay, cx));
     cw_float8 w = v8_sub(v8_mul(bx, ay), v8_mul(by, ax));
     cw_float8 zero = v8_splat(0.0f), det = v8_add(v8_add(u, v), w), tt, inv, t;
-    /* isect_triangle's miss: some edge function < 0 and some > 0, or det = 0 */
-    cw_int8 neg = m8_or(m8_or(v8_lt(u, zero), v8_lt(v, zero)), v8_lt(w, zero));
-    cw_int8 pos = m8_or(m8_or(v8_gt(u, zero), v8_gt(v, zero)), v8_gt(w, zero));
+    /* isect_triangle's miss: some edge function < 0 and some > 0, or det = 0; as the least
+     * and greatest of the three (four lane operations fewer than six comparisons: kernel
+     * instructions -4.4% on 100k random triangles, the same image). A NaN edge function
+     * can pass here where it would not there, but its lane's t is NaN and fails below. */
+    cw_int8 neg = v8_lt(v8_min(v8_min(u, v), w), zero);
+    cw_int8 pos = v8_gt(v8_max(v8_max(u, v), w), zero);
     unsigned m = m8_bits(m8_andnot(m8_and(neg, pos), v8_ne(det, zero))) & lanes;
     float lv[8], lw[8], lt[8], li[8];
     int best;
