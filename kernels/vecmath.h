@@ -149,18 +149,22 @@ CW_INLINE vec3 v3_cross(vec3 a, vec3 b)
 {
     return cross(a, b);
 }
-/* |a|, and a / |a|: as sqrt of the dot product where that is a normal float, else (a huge
- * or tiny vector) through length and normalize, which scale to avoid its overflow and
+/* |a|, and a / |a|: as sqrt of the dot product d where that is plain (v3_plain_dot), else (a
+ * huge or tiny vector) through length and normalize, which scale to avoid its overflow and
  * underflow (and cost three times the instructions on PoCL) */
+CW_INLINE int v3_plain_dot(float d)
+{
+    return d >= 0x1p-100f && d <= 0x1p+100f;
+}
 CW_INLINE float v3_len(vec3 a)
 {
     float d = dot(a, a);
-    return d >= 0x1p-100f && d <= 0x1p+100f ? sqrt(d) : length(a);
+    return v3_plain_dot(d) ? sqrt(d) : length(a);
 }
 CW_INLINE vec3 v3_norm(vec3 a)
 {
     float d = dot(a, a);
-    return d >= 0x1p-100f && d <= 0x1p+100f ? a * (1.0f / sqrt(d)) : normalize(a);
+    return v3_plain_dot(d) ? a * (1.0f / sqrt(d)) : normalize(a);
 }
 /* the lanes of one box test */
 CW_INLINE cw_lanes vl_splat(float a)
