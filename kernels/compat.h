@@ -60,8 +60,18 @@ typedef int4 cw_lanes_int;
 #define cw_nmad(a, b, c) (-(a) * (b) + (c))
 #endif
 #define CW_INFINITY INFINITY
-/* the index of the lowest set bit of x (x != 0); OpenCL 1.2 has clz but not ctz */
+/* the index of the lowest set bit of x (x != 0). OpenCL 1.2 has clz but not ctz: a compiler
+ * with the builtin (clang: PoCL, Intel's runtime, Oclgrind) makes one tzcnt of it, where
+ * 31 - clz(x & -x) took three instructions in every lane loop of the walks (100k random
+ * triangles at 256x256: kernel instructions 216.3M -> 209.1M, the same images). */
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_ctz)
+#define cw_ctz(x) __builtin_ctz(x)
+#endif
+#endif
+#ifndef cw_ctz
 #define cw_ctz(x) (31 - (int)clz((x) & (0u - (x))))
+#endif
 
 /* The robust path relies on a*b - c*d being computed the same way for both triangles of
  * a shared edge: no fused multiply-add contraction (cw_nmad fuses where asked). */
