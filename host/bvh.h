@@ -51,9 +51,9 @@ int bvh_build(bvh *out, const bvh_box *boxes, int n, int max_leaf, char *err, si
  * from config.h). The tree is the same, bit for bit, for every thread count. */
 int bvh_build_threads(bvh *out, const bvh_box *boxes, int n, int max_leaf, int threads, char *err,
                       size_t errlen);
-/* Block classes: primitives the kernels keep in blocks of four in a leaf of one class only
- * (triangles: cw_tri4, spheres: cw_sph4) and test BVH_BLOCK_TEST at a time (two blocks in
- * one test of eight lanes; about as fast as one block on a CPU with 256-bit vectors). */
+/* Block classes: primitives the kernels keep in blocks in a leaf of one class only
+ * (triangles: eight to a block, cw_tri8; spheres: four, cw_sph4) and test BVH_BLOCK_TEST at
+ * a time (one test of eight lanes; about as fast as four on a CPU with 256-bit vectors). */
 #define BVH_BLOCK_CLASSES 2
 #define BVH_BLOCK_TEST 8
 

@@ -10,8 +10,8 @@
 #define C_TRAV 1.0  /* SAH cost of visiting an interior node */
 #define C_ISECT 1.0 /* SAH cost of testing one primitive, or SAH_BLOCK of a block class */
 /* Primitives of a block class (1 .. BVH_BLOCK_CLASSES) are tested SAH_BLOCK at a time where
- * a leaf holds only primitives of that class (the kernels' cw_tri4 and cw_sph4, two blocks
- * of four in one test): such a leaf of n costs C_ISECT * ceil(n / SAH_BLOCK). */
+ * a leaf holds only primitives of that class (the kernels' cw_tri8, or two cw_sph4, in one
+ * test): such a leaf of n costs C_ISECT * ceil(n / SAH_BLOCK). */
 #define SAH_BLOCK BVH_BLOCK_TEST
 
 /* One primitive in the working array: its box and input index (32 bytes). */

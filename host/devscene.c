@@ -414,30 +414,31 @@ static void count_blocks(const devscene *ds, int n0, int n1, size_t *ntb, size_t
             int c = ds->tree_wide.nodes[n].count[i];
             int kind = c > 0 ? leaf_block_kind(ds->refs, ds->tree_wide.nodes[n].child[i], c) : 0;
             if (kind == CW_PRIM_TRIANGLE)
-                *ntb += ((size_t)c + 3) / 4;
+                *ntb += ((size_t)c + 7) / 8;
             else if (kind == CW_PRIM_SPHERE)
                 *nsb += ((size_t)c + 3) / 4;
         }
 }
 
-/* Packs the c triangles of a leaf from refs[first] into blocks from ds->tri_blocks[b]. */
+/* Packs the c triangles of a leaf from refs[first] into blocks of eight from
+ * ds->tri_blocks[b]: row r of lane i in v[2 * r + i / 4] (see cw_tri8). */
 static void pack_triangles(devscene *ds, int first, int c, size_t b)
 {
     for (int k = 0; k < c; k++) {
-        cw_tri4 *blk = &ds->tri_blocks[b + (size_t)k / 4];
-        int idx = CW_REF_INDEX(ds->refs[first + k]), lane = k % 4;
+        cw_tri8 *blk = &ds->tri_blocks[b + (size_t)k / 8];
+        int idx = CW_REF_INDEX(ds->refs[first + k]), lane = k % 8, half = lane / 4;
         const cw_float4 *p[3] = {&ds->tri[idx].p0, &ds->tri[idx].p1, &ds->tri[idx].p2};
         for (int v = 0; v < 3; v++) {
-            set_lane(&blk->v[3 * v], lane, p[v]->x);
-            set_lane(&blk->v[3 * v + 1], lane, p[v]->y);
-            set_lane(&blk->v[3 * v + 2], lane, p[v]->z);
+            set_lane(&blk->v[2 * (3 * v) + half], lane % 4, p[v]->x);
+            set_lane(&blk->v[2 * (3 * v + 1) + half], lane % 4, p[v]->y);
+            set_lane(&blk->v[2 * (3 * v + 2) + half], lane % 4, p[v]->z);
         }
         blk->index[lane] = idx;
         blk->material[lane] = ds->tri[idx].material;
         blk->normals[lane] = ds->tri[idx].normals;
     }
-    for (int k = c; k % 4 != 0; k++)
-        ds->tri_blocks[b + (size_t)k / 4].index[k % 4] = -1;
+    for (int k = c; k % 8 != 0; k++)
+        ds->tri_blocks[b + (size_t)k / 8].index[k % 8] = -1;
 }
 
 /* Packs the c spheres of a leaf from refs[first] into blocks from ds->sph_blocks[b]. */
@@ -466,13 +467,15 @@ static void pack_nodes(devscene *ds, int n0, int n1, size_t tb, size_t sb)
         for (int i = 0; i < CW_BVH_WIDTH; i++) {
             cw_bvhw_node *nd = &ds->tree_wide.nodes[n];
             int c = nd->count[i], first = nd->child[i];
-            int kind = c > 0 ? leaf_block_kind(ds->refs, first, c) : 0, nb = (c + 3) / 4;
+            int kind = c > 0 ? leaf_block_kind(ds->refs, first, c) : 0, nb;
             if (kind == CW_PRIM_TRIANGLE) {
+                nb = (c + 7) / 8;
                 pack_triangles(ds, first, c, tb);
                 nd->child[i] = (int)tb;
                 nd->count[i] = -1 - nb;
                 tb += (size_t)nb;
             } else if (kind == CW_PRIM_SPHERE) {
+                nb = (c + 3) / 4;
                 pack_spheres(ds, first, c, sb);
                 nd->child[i] = (int)sb;
                 nd->count[i] = -1 - (nb | CW_LEAF_SPHERES);
@@ -496,10 +499,10 @@ static void *pack_part_run(void *arg)
 }
 
 /* Packs every leaf of two or more triangles only, or two or more spheres only, into blocks
- * of four (cw_tri4, cw_sph4; in leaf order, so the kernels test them in the order of the
- * references) and points the leaf at its blocks. A leaf of one primitive stays a
- * reference: a block of one would test no faster and cost more memory. The nodes are cut
- * into PACK_PARTS ranges, each counted, then packed on its own thread where the scene is
+ * (of eight triangles, cw_tri8, or four spheres, cw_sph4; in leaf order, so the kernels
+ * test them in the order of the references) and points the leaf at its blocks. A leaf of one
+ * primitive stays a reference: a block of one would test no faster and cost more memory. The nodes
+ * are cut into PACK_PARTS ranges, each counted, then packed on its own thread where the scene is
  * big (the same blocks as one pass in order). */
 static int pack_leaves(devscene *ds, char *err, size_t errlen)
 {
@@ -547,8 +550,8 @@ static int pack_leaves(devscene *ds, char *err, size_t errlen)
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen)
 {
     int i, rc;
-    /* triangles (class 1) and spheres (class 2) are kept in blocks of four in a leaf of one
-     * kind only (pack_leaves) and tested BVH_BLOCK_TEST at a time */
+    /* triangles (class 1) and spheres (class 2) are kept in blocks in a leaf of one kind
+     * only (pack_leaves) and tested BVH_BLOCK_TEST at a time */
     unsigned char *blocks = malloc(ds->nbox > 0 ? (size_t)ds->nbox : 1);
     if (!blocks) {
         snprintf(err, errlen, "out of memory for the BVH");

@@ -28,7 +28,7 @@ typedef struct {
     cw_sphere *sph;
     int *sph_mat; /* sphere i's material (kernels/types.h, cw_sphere) */
     cw_triangle *tri;
-    cw_tri4 *tri_blocks; /* the leaves of triangles only, four to a block */
+    cw_tri8 *tri_blocks; /* the leaves of triangles only, eight to a block */
     cw_sph4 *sph_blocks; /* the leaves of spheres only, four to a block */
     cw_float4 *normals;
     cw_polygon *pg;
@@ -91,8 +91,8 @@ cw_float4 devscene_f4(vec3f v, float w);
 int devscene_convert(const scene *s, const vec3d *origin, devscene *ds, char *err, size_t errlen);
 
 /* Builds the BVH over the boxes, collapses it to the wide tree the kernels traverse, turns
- * its leaf entries into CW_REFs and packs its leaves of triangles only into blocks of four
- * (cw_tri4); then frees what only the build needed (the boxes,
+ * its leaf entries into CW_REFs and packs its leaves of triangles only or spheres only into
+ * blocks (cw_tri8, cw_sph4); then frees what only the build needed (the boxes,
  * the box map, the binary tree's arrays). Returns 0, or -1 with err. */
 int devscene_build_bvh(devscene *ds, char *err, size_t errlen);
 

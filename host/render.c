@@ -24,7 +24,7 @@
 _Static_assert(sizeof(cw_float4) == 16, "cw_float4 must be 16 bytes");
 _Static_assert(sizeof(cw_sphere) == 16, "cw_sphere layout");
 _Static_assert(sizeof(cw_triangle) == 64, "cw_triangle layout");
-_Static_assert(sizeof(cw_tri4) == 192, "cw_tri4 layout");
+_Static_assert(sizeof(cw_tri8) == 384, "cw_tri8 layout");
 _Static_assert(sizeof(cw_sph4) == 96, "cw_sph4 layout");
 _Static_assert(sizeof(cw_cone) == 48, "cw_cone layout");
 _Static_assert(sizeof(cw_shadow_ray) == 64, "cw_shadow_ray layout");
@@ -684,7 +684,7 @@ void render_format_walk(const render_stats *st, char *buf, size_t n)
     unsigned long long closest = st->eye_rays + st->secondary_rays;
     snprintf(buf, n,
              "walk: closest-hit rays %.2f nodes, %.2f tests each; shadow rays %.2f nodes, "
-             "%.2f tests each (one or two blocks of four primitives: one test)",
+             "%.2f tests each (one test: up to eight primitives of a leaf)",
              per_ray(st->closest_nodes, closest), per_ray(st->closest_tests, closest),
              per_ray(st->any_nodes, st->shadow_rays), per_ray(st->any_tests, st->shadow_rays));
 }

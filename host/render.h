@@ -78,8 +78,8 @@ typedef struct {
     unsigned long long eye_rays, eye_hits;
     unsigned long long shadow_rays, shadow_blocked;
     unsigned long long secondary_rays, secondary_hits;
-    /* the BVH walks' work (settings.stats): nodes visited and primitive tests made (one or
-     * two blocks of four primitives are one test) by the closest-hit walks (eye and secondary rays)
+    /* the BVH walks' work (settings.stats): nodes visited and primitive tests made (one test:
+     * up to eight primitives of a leaf) by the closest-hit walks (eye and secondary rays)
      * and by the shadow rays' any-hit walks (shadow cache tests included) */
     unsigned long long closest_nodes, closest_tests, any_nodes, any_tests;
     double build_s;   /* acceleration structure build on the host */

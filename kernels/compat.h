@@ -27,7 +27,7 @@
 #define CW_FORCE_INLINE static inline __attribute__((always_inline))
 
 typedef float4 cw_float4;
-/* the eight lanes of one test of two blocks of primitives (cw_tri4, cw_sph4) */
+/* the eight lanes of one test: a block of triangles (cw_tri8), two blocks of spheres (cw_sph4) */
 typedef float8 cw_float8;
 typedef int8 cw_int8; /* a lane mask of eight: -1 true, 0 false */
 typedef float3 vec3;

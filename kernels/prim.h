@@ -64,7 +64,7 @@ CW_FORCE_INLINE void prim_intersect(const cw_world *w, int ref, const cw_rayinfo
 
 #if CW_HAS_SPHERES || CW_HAS_TRIANGLES
 /* Records a hit at t (u, v) on primitive `index` of a kind kept in blocks, found in lane
- * `lane` (0-7) of a test of blocks `block` and block + 1, in *hit, and lowers *tmax to t. */
+ * `lane` of block `block`, in *hit, and lowers *tmax to t. */
 CW_FORCE_INLINE void prim_block_hit(cw_hit *hit, float *tmax, float t, float u, float v, int kind,
                                     int index, int block, int lane)
 {
@@ -75,26 +75,24 @@ CW_FORCE_INLINE void prim_block_hit(cw_hit *hit, float *tmax, float t, float u, 
     hit->kind = kind;
     hit->index = index;
     hit->inst = 0;
-    hit->block = block + (lane >> 2) + 1;
-    hit->lane = lane & 3;
+    hit->block = block + 1;
+    hit->lane = lane;
 }
 #endif
 
 #if CW_HAS_TRIANGLES
-/* Tests the ray against the triangles of block `block` and, where two is set, of the next
- * block too, in one test (a leaf of triangles only, cw_tri4), never the primitive skip - 1;
- * on a hit closer than *tmax, records it in *hit (its block and lane there) and lowers
- * *tmax: what prim_intersect does for each of them in lane order. */
-CW_FORCE_INLINE void prim_tri8(const cw_world *w, int block, int two, const cw_rayinfo *ri,
-                               float tmin, int skip, float *tmax, cw_hit *hit)
+/* Tests the ray against the eight triangles of block `block` in one test (a leaf of triangles
+ * only, cw_tri8), never the primitive skip - 1; on a hit closer than *tmax, records it in *hit
+ * (its block and lane there) and lowers *tmax: what prim_intersect does for each of them in
+ * lane order. */
+CW_FORCE_INLINE void prim_tri8(const cw_world *w, int block, const cw_rayinfo *ri, float tmin,
+                               int skip, float *tmax, cw_hit *hit)
 {
-    CW_GLOBAL const cw_tri4 *b0 = &w->tri_blocks[block];
-    CW_GLOBAL const cw_tri4 *b1 = two ? b0 + 1 : b0;
+    CW_GLOBAL const cw_tri8 *b = &w->tri_blocks[block];
     float t = 0.0f, u = 0.0f, v = 0.0f;
-    int lane = isect_tri8(b0, b1, two ? 255u : 15u, ri, tmin, *tmax, skip, &t, &u, &v);
+    int lane = isect_tri8(b, ri, tmin, *tmax, skip, &t, &u, &v);
     if (lane >= 0)
-        prim_block_hit(hit, tmax, t, u, v, CW_PRIM_TRIANGLE, (lane < 4 ? b0 : b1)->index[lane & 3],
-                       block, lane);
+        prim_block_hit(hit, tmax, t, u, v, CW_PRIM_TRIANGLE, b->index[lane], block, lane);
 }
 #endif
 
@@ -111,7 +109,7 @@ CW_FORCE_INLINE void prim_sph8(const cw_world *w, int block, int two, const cw_r
     int lane = isect_sph8(b0, b1, two ? 255u : 15u, ri->o, ri->d, tmin, *tmax, &t);
     if (lane >= 0)
         prim_block_hit(hit, tmax, t, 0.0f, 0.0f, CW_PRIM_SPHERE,
-                       (lane < 4 ? b0 : b1)->index[lane & 3], block, lane);
+                       (lane < 4 ? b0 : b1)->index[lane & 3], block + (lane >> 2), lane & 3);
 }
 #endif
 

@@ -147,15 +147,16 @@ CW_INLINE int bvh_any_next(const int *stack, int *sp, int next)
 }
 
 /* A shadow cache entry (Haines and Greenberg's light buffer, cut down to one leaf test):
- * what blocked the last shadow ray toward one light, a test of one or two blocks of four
- * triangles or spheres (tag BVH_OCC_TRI4 or _SPH4, index: the first block, two: the next one
- * too), the eight lanes the walk's test met it in, or a primitive (BVH_OCC_PRIM, index: its
- * CW_REF), or nothing (BVH_OCC_NONE). bvh_any tests it before its walk. The answer does not
- * change: the entry is tested with the walk's own primitive tests and skip, and a hit the
- * primitive test finds is one the walk finds too (its box test is conservative on the robust
- * path); the walk would only have found it, or another occluder, later. */
+ * what blocked the last shadow ray toward one light, a test of a block of eight triangles
+ * (tag BVH_OCC_TRI8, index: the block) or of one or two blocks of four spheres (BVH_OCC_SPH4,
+ * index: the first block, two: the next one too), the eight lanes the walk's test met it
+ * in, or a primitive (BVH_OCC_PRIM, index: its CW_REF), or nothing (BVH_OCC_NONE). bvh_any
+ * tests it before its walk. The answer does not change: the entry is tested with the walk's
+ * own primitive tests and skip, and a hit the primitive test finds is one the walk finds too
+ * (its box test is conservative on the robust path); the walk would only have found it, or
+ * another occluder, later. */
 #define BVH_OCC_NONE 0
-#define BVH_OCC_TRI4 1
+#define BVH_OCC_TRI8 1
 #define BVH_OCC_SPH4 2
 #define BVH_OCC_PRIM 3
 typedef struct {
@@ -163,9 +164,9 @@ typedef struct {
 } bvh_occluder;
 
 #if CW_HAS_SPHERES || CW_HAS_TRIANGLES
-/* One leaf test (see CW_LEAF_SPHERES): block k of a leaf of blocks and, where two is set,
- * block k + 1 too, of spheres where spheres is set, else of triangles (never the triangle
- * skip - 1), in one 8-lane test: on a hit closer than *t_best, records it in *hit and lowers
+/* One leaf test (see CW_LEAF_SPHERES), in eight lanes: block k of a leaf of triangles (never
+ * the triangle skip - 1), or where spheres is set, block k of a leaf of spheres and, where two
+ * is set, block k + 1 too: on a hit closer than *t_best, records it in *hit and lowers
  * *t_best. Always inlined, as is bvh_any_test: as calls they made each walk spill its
  * vector registers (all caller-saved) and reload them after every leaf test. */
 CW_FORCE_INLINE void bvh_leaf_test(const cw_world *w, int spheres, int k, int two,
@@ -179,31 +180,34 @@ CW_FORCE_INLINE void bvh_leaf_test(const cw_world *w, int spheres, int k, int tw
     }
 #endif
 #if CW_HAS_TRIANGLES
-    prim_tri8(w, k, two, ri, tmin, skip, t_best, hit);
+    prim_tri8(w, k, ri, tmin, skip, t_best, hit);
 #endif
     (void)spheres;
+    (void)two;
     (void)skip;
 }
 
-/* A leaf of blocks (count < -1): whether it holds spheres, and the end of its blocks from
- * `first`, in *end. */
-CW_INLINE int bvh_leaf_spheres(int first, int count, int *end)
+/* A leaf of blocks (count < -1): whether it holds spheres, the end of its blocks from
+ * `first` in *end, and the blocks one test takes in *step (spheres: two of four, triangles:
+ * one of eight). */
+CW_INLINE int bvh_leaf_spheres(int first, int count, int *end, int *step)
 {
-    int code = -1 - count;
+    int code = -1 - count, spheres = (code & CW_LEAF_SPHERES) != 0;
     *end = first + (code & (CW_LEAF_SPHERES - 1));
-    return (code & CW_LEAF_SPHERES) != 0;
+    *step = spheres ? 2 : 1;
+    return spheres;
 }
 
-/* A leaf of blocks (count < -1), of the world's tree or a mesh's: its blocks two at a time
- * in order, never the triangle skip - 1; on a hit closer than *t_best, records it in *hit
- * and lowers *t_best. */
+/* A leaf of blocks (count < -1), of the world's tree or a mesh's: its tests in order, never
+ * the triangle skip - 1; on a hit closer than *t_best, records it in *hit and lowers
+ * *t_best. */
 CW_INLINE void bvh_closest_leaf_blocks(const cw_world *w, int first, int count,
                                        const cw_rayinfo *ri, float tmin, int skip, float *t_best,
                                        cw_hit *hit)
 {
-    int end, spheres = bvh_leaf_spheres(first, count, &end);
-    BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, (end - first + 1) / 2);
-    for (int k = first; k < end; k += 2)
+    int end, step, spheres = bvh_leaf_spheres(first, count, &end, &step);
+    BVH_COUNT(w, CW_COUNT_CLOSEST_TESTS, (end - first + step - 1) / step);
+    for (int k = first; k < end; k += step)
         bvh_leaf_test(w, spheres, k, k + 1 < end, ri, tmin, skip, t_best, hit);
 }
 
@@ -224,11 +228,11 @@ CW_FORCE_INLINE int bvh_any_test(const cw_world *w, int spheres, int k, int two,
 CW_INLINE int bvh_any_leaf_blocks(const cw_world *w, int first, int count, const cw_rayinfo *ri,
                                   float tmin, float tmax, int skip, bvh_occluder *oc)
 {
-    int end, spheres = bvh_leaf_spheres(first, count, &end);
-    for (int k = first; k < end; k += 2) {
+    int end, step, spheres = bvh_leaf_spheres(first, count, &end, &step);
+    for (int k = first; k < end; k += step) {
         int two = k + 1 < end;
         if (bvh_any_test(w, spheres, k, two, ri, tmin, tmax, skip)) {
-            oc->tag = spheres ? BVH_OCC_SPH4 : BVH_OCC_TRI4;
+            oc->tag = spheres ? BVH_OCC_SPH4 : BVH_OCC_TRI8;
             oc->index = k;
             oc->two = two;
             return 1;
@@ -251,7 +255,7 @@ CW_INLINE int bvh_any_prim(const cw_world *w, int ref, const cw_rayinfo *ri, flo
 
 #if CW_HAS_INSTANCES
 /* Closest hit in a mesh's own tree from node root, for the ray ri in mesh coordinates:
- * its leaves hold triangles only (blocks of four, or single references). On a hit closer
+ * its leaves hold triangles only (blocks of eight, or single references). On a hit closer
  * than *t_best, records it in *hit and lowers *t_best. skip: as in bvh_closest, within
  * this mesh. The walk of bvh_closest, without instances. */
 CW_INLINE void bvh_mesh_closest(const cw_world *w, int root, const cw_rayinfo *ri, float tmin,
@@ -412,7 +416,7 @@ CW_INLINE void bvh_closest(const cw_world *w, vec3 o, vec3 d, float tmin, float 
                     }
                 }
 #if CW_HAS_SPHERES || CW_HAS_TRIANGLES
-            } else if (count < -1) { /* blocks of four spheres or triangles */
+            } else if (count < -1) { /* blocks of spheres or triangles */
                 bvh_closest_leaf_blocks(w, nd->child[i], count, &ri, tmin, wskip, &t_best, &hit);
 #endif
             }
@@ -432,7 +436,7 @@ CW_INLINE int bvh_any_cached(const cw_world *w, const bvh_occluder *oc, const cw
 {
     switch (oc->tag) {
 #if CW_HAS_SPHERES || CW_HAS_TRIANGLES
-    case BVH_OCC_TRI4:
+    case BVH_OCC_TRI8:
     case BVH_OCC_SPH4:
         return bvh_any_test(w, oc->tag == BVH_OCC_SPH4, oc->index, oc->two, ri, tmin, tmax, skip);
 #endif

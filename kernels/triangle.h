@@ -1,6 +1,6 @@
 /* Triangles (cw_triangle), flat or smooth (vertex normals): the ray-triangle test, one
- * triangle at a time or the four or eight of one or two blocks of a leaf at once (cw_tri4),
- * and the surface at a hit. */
+ * triangle at a time or the eight of one block of a leaf at once (cw_tri8), and the surface at
+ * a hit. */
 #ifndef CW_TRIANGLE_H
 #define CW_TRIANGLE_H
 
@@ -11,23 +11,23 @@
 #include "vecmath.h"
 #include "world.h"
 
-/* The lanes of one test of blocks b0 (lanes 0-3) and b1 (lanes 4-7): lane i's coordinate
- * array v[j] (see cw_tri4). A test of one block passes it as both and leaves lanes 4-7 out. */
-CW_INLINE cw_float8 tri8_coord(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b1, int j)
+/* The eight lanes of row r of a block from its first half: r[0] (lanes 0-3) and r[1] (lanes
+ * 4-7), which lie side by side (see cw_tri8): one load. */
+CW_INLINE cw_float8 tri8_row(CW_GLOBAL const cw_float4 *r)
 {
-    return v8_pair(b0->v[j], b1->v[j]);
+    return v8_pair(r[0], r[1]);
 }
 
-/* The lane of blocks b0 and b1 to report among the lanes m whose hits lie at lt[lane]: the
- * closest below tmax, leaving out unused lanes and the triangle whose CW_REF is skip - 1; the
- * first of equally close ones (as testing them one by one in lane order); -1 for none. Both
+/* The lane of block b to report among the lanes m whose hits lie at lt[lane]: the closest
+ * below tmax, leaving out unused lanes and the triangle whose CW_REF is skip - 1; the first
+ * of equally close ones (as testing them one by one in lane order); -1 for none. Both
  * isect_tri8 paths end with it. */
-CW_INLINE int tri8_nearest(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b1, unsigned m,
-                           const float *lt, float tmax, int skip)
+CW_INLINE int tri8_nearest(CW_GLOBAL const cw_tri8 *b, unsigned m, const float *lt, float tmax,
+                           int skip)
 {
     int best = -1;
     while (m != 0u) {
-        int i = cw_ctz(m), idx = (i < 4 ? b0 : b1)->index[i & 3];
+        int i = cw_ctz(m), idx = b->index[i];
         m &= m - 1u;
         if (idx < 0 || CW_REF(CW_PRIM_TRIANGLE, idx) + 1 == skip || !(lt[i] < tmax))
             continue;
@@ -70,24 +70,23 @@ CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo 
     return 1;
 }
 
-/* The triangles of blocks b0 and b1 at once, lanes 0-3 and 4-7 (Moeller-Trumbore, each lane
- * as isect_triangle), of the lanes set in `lanes` (15: b0 only, b1 = b0; 255: both): the
- * closest hit in (tmin, tmax), never the triangle whose CW_REF is skip - 1. Returns its lane,
+/* The eight triangles of block b at once (Moeller-Trumbore, each lane as isect_triangle; an
+ * unused lane's zero vertices fail the determinant test): the closest hit in (tmin, tmax),
+ * never the triangle whose CW_REF is skip - 1. Returns its lane,
  * the first of equally close ones (as testing them one by one in lane order), or -1.
  * isect_triangle's tests are lane masks, and a block whose lanes all fail the determinant
  * and u tests ends there (a loop over the lanes with a branch per test made --precision
  * fast 1.6x slower than robust on a million triangles). */
-CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b1, unsigned lanes,
-                         const cw_rayinfo *ri, float tmin, float tmax, int skip, float *t_out,
-                         float *u_out, float *v_out)
+CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri8 *b, const cw_rayinfo *ri, float tmin, float tmax,
+                         int skip, float *t_out, float *u_out, float *v_out)
 {
     cw_float8 dx = v8_splat(ri->d.x), dy = v8_splat(ri->d.y), dz = v8_splat(ri->d.z);
-    cw_float8 p0x = tri8_coord(b0, b1, 0), p0y = tri8_coord(b0, b1, 1);
-    cw_float8 p0z = tri8_coord(b0, b1, 2);
-    cw_float8 e1x = v8_sub(tri8_coord(b0, b1, 3), p0x), e1y = v8_sub(tri8_coord(b0, b1, 4), p0y);
-    cw_float8 e1z = v8_sub(tri8_coord(b0, b1, 5), p0z);
-    cw_float8 e2x = v8_sub(tri8_coord(b0, b1, 6), p0x), e2y = v8_sub(tri8_coord(b0, b1, 7), p0y);
-    cw_float8 e2z = v8_sub(tri8_coord(b0, b1, 8), p0z);
+    cw_float8 p0x = tri8_row(b->v + 0), p0y = tri8_row(b->v + 2);
+    cw_float8 p0z = tri8_row(b->v + 4);
+    cw_float8 e1x = v8_sub(tri8_row(b->v + 6), p0x), e1y = v8_sub(tri8_row(b->v + 8), p0y);
+    cw_float8 e1z = v8_sub(tri8_row(b->v + 10), p0z);
+    cw_float8 e2x = v8_sub(tri8_row(b->v + 12), p0x), e2y = v8_sub(tri8_row(b->v + 14), p0y);
+    cw_float8 e2z = v8_sub(tri8_row(b->v + 16), p0z);
     cw_float8 px = v8_sub(v8_mul(dy, e2z), v8_mul(dz, e2y));
     cw_float8 py = v8_sub(v8_mul(dz, e2x), v8_mul(dx, e2z));
     cw_float8 pz = v8_sub(v8_mul(dx, e2y), v8_mul(dy, e2x));
@@ -100,7 +99,7 @@ CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b
     /* isect_triangle's misses so far: |det| < 1e-9, u < 0, u > 1 */
     cw_int8 small = m8_and(v8_lt(det, v8_splat(1e-9f)), v8_gt(det, v8_splat(-1e-9f)));
     cw_int8 out = m8_or(small, m8_or(v8_lt(u, zero), v8_gt(u, one)));
-    unsigned m = ~m8_bits(out) & lanes;
+    unsigned m = ~m8_bits(out) & 255u;
     float lu[8], lv[8], lt[8];
     int best;
     if (m == 0u)
@@ -117,7 +116,7 @@ CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b
     v8_store(u, lu);
     v8_store(v, lv);
     v8_store(t, lt);
-    best = tri8_nearest(b0, b1, m, lt, tmax, skip);
+    best = tri8_nearest(b, m, lt, tmax, skip);
     if (best >= 0) {
         *t_out = lt[best];
         *u_out = lu[best];
@@ -173,35 +172,32 @@ CW_INLINE int isect_triangle(CW_GLOBAL const cw_triangle *tri, const cw_rayinfo 
     return 1;
 }
 
-/* The triangles of blocks b0 and b1 at once, lanes 0-3 and 4-7, of the lanes set in `lanes`
- * (15: b0 only, b1 = b0; 255: both), each lane with exactly isect_triangle's float operations
+/* The eight triangles of block b at once, each lane with exactly isect_triangle's float operations
  * (the same hits, bit for bit): the closest hit in (tmin, tmax), never the triangle whose
  * CW_REF is skip - 1. One test of eight lanes takes about as long as one of four on a CPU
  * with 256-bit vectors, so a leaf of up to eight triangles is one test (host/bvh_sah.h). Returns
  * its lane, the first of equally close ones (as testing them one by one in lane order), or -1. The
  * edge-sign and determinant tests are lane masks, so a block the ray misses (the common case) ends
  * before the division and without a branch per lane; an unused lane (zero vertices) has det = 0. */
-CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b1, unsigned lanes,
-                         const cw_rayinfo *ri, float tmin, float tmax, int skip, float *t_out,
-                         float *u_out, float *v_out)
+CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri8 *b, const cw_rayinfo *ri, float tmin, float tmax,
+                         int skip, float *t_out, float *u_out, float *v_out)
 {
-    /* each vertex's permuted coordinates through three row pointers per block, at fixed
-     * offsets from them: indexing the rows by 3 + kx and so on kept nine offsets, each
-     * reloaded and scaled before its load (kernel instructions 209.1M -> 201.8M on 100k
-     * random triangles at 256x256, the same images) */
-    CW_GLOBAL const cw_float4 *x0 = b0->v + ri->kx, *x1 = b1->v + ri->kx;
-    CW_GLOBAL const cw_float4 *y0 = b0->v + ri->ky, *y1 = b1->v + ri->ky;
-    CW_GLOBAL const cw_float4 *z0 = b0->v + ri->kz, *z1 = b1->v + ri->kz;
+    /* each vertex's permuted coordinates through three row pointers, at fixed offsets from
+     * them: indexing the rows by 3 + kx and so on kept nine offsets, each reloaded and
+     * scaled before its load (kernel instructions 209.1M -> 201.8M on 100k random triangles
+     * at 256x256, the same images) */
+    CW_GLOBAL const cw_float4 *x = b->v + 2 * ri->kx, *y = b->v + 2 * ri->ky;
+    CW_GLOBAL const cw_float4 *z = b->v + 2 * ri->kz;
     cw_float8 ox = v8_splat(ri->ox), oy = v8_splat(ri->oy), oz = v8_splat(ri->oz);
     cw_float8 sx = v8_splat(ri->sx), sy = v8_splat(ri->sy), sz = v8_splat(ri->sz);
-    cw_float8 az = v8_sub(v8_pair(z0[0], z1[0]), oz), bz = v8_sub(v8_pair(z0[3], z1[3]), oz);
-    cw_float8 cz = v8_sub(v8_pair(z0[6], z1[6]), oz);
-    cw_float8 ax = v8_nmad(sx, az, v8_sub(v8_pair(x0[0], x1[0]), ox));
-    cw_float8 ay = v8_nmad(sy, az, v8_sub(v8_pair(y0[0], y1[0]), oy));
-    cw_float8 bx = v8_nmad(sx, bz, v8_sub(v8_pair(x0[3], x1[3]), ox));
-    cw_float8 by = v8_nmad(sy, bz, v8_sub(v8_pair(y0[3], y1[3]), oy));
-    cw_float8 cx = v8_nmad(sx, cz, v8_sub(v8_pair(x0[6], x1[6]), ox));
-    cw_float8 cy = v8_nmad(sy, cz, v8_sub(v8_pair(y0[6], y1[6]), oy));
+    cw_float8 az = v8_sub(tri8_row(z), oz), bz = v8_sub(tri8_row(z + 6), oz);
+    cw_float8 cz = v8_sub(tri8_row(z + 12), oz);
+    cw_float8 ax = v8_nmad(sx, az, v8_sub(tri8_row(x), ox));
+    cw_float8 ay = v8_nmad(sy, az, v8_sub(tri8_row(y), oy));
+    cw_float8 bx = v8_nmad(sx, bz, v8_sub(tri8_row(x + 6), ox));
+    cw_float8 by = v8_nmad(sy, bz, v8_sub(tri8_row(y + 6), oy));
+    cw_float8 cx = v8_nmad(sx, cz, v8_sub(tri8_row(x + 12), ox));
+    cw_float8 cy = v8_nmad(sy, cz, v8_sub(tri8_row(y + 12), oy));
     cw_float8 u = v8_sub(v8_mul(cx, by), v8_mul(cy, bx));
     cw_float8 v = v8_sub(v8_mul(ax, cy), v8_mul(ay, cx));
     cw_float8 w = v8_sub(v8_mul(bx, ay), v8_mul(by, ax));
@@ -212,7 +208,7 @@ CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b
      * can pass here where it would not there, but its lane's t is NaN and fails below. */
     cw_int8 neg = v8_lt(v8_min(v8_min(u, v), w), zero);
     cw_int8 pos = v8_gt(v8_max(v8_max(u, v), w), zero);
-    unsigned m = m8_bits(m8_andnot(m8_and(neg, pos), v8_ne(det, zero))) & lanes;
+    unsigned m = m8_bits(m8_andnot(m8_and(neg, pos), v8_ne(det, zero)));
     float lv[8], lw[8], lt[8], li[8];
     int best;
     if (m == 0u)
@@ -228,7 +224,7 @@ CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b
     v8_store(w, lw);
     v8_store(t, lt);
     v8_store(inv, li);
-    best = tri8_nearest(b0, b1, m, lt, tmax, skip);
+    best = tri8_nearest(b, m, lt, tmax, skip);
     if (best >= 0) {
         *t_out = lt[best];
         *u_out = lv[best] * li[best];
@@ -238,11 +234,11 @@ CW_INLINE int isect_tri8(CW_GLOBAL const cw_tri4 *b0, CW_GLOBAL const cw_tri4 *b
 }
 #endif
 
-/* Vertex k (0, 1, 2) of lane i of block b. */
-CW_INLINE vec3 tri4_vertex(CW_GLOBAL const cw_tri4 *b, int k, int i)
+/* Vertex k (0, 1, 2) of lane i of block b: rows 3k .. 3k + 2 (see cw_tri8). */
+CW_INLINE vec3 tri8_vertex(CW_GLOBAL const cw_tri8 *b, int k, int i)
 {
-    CW_GLOBAL const float *x = (CW_GLOBAL const float *)&b->v[3 * k];
-    return v3(x[i], x[4 + i], x[8 + i]);
+    CW_GLOBAL const float *x = (CW_GLOBAL const float *)&b->v[6 * k];
+    return v3(x[i], x[8 + i], x[16 + i]);
 }
 
 /* The surface at a triangle hit: the point from the barycentric coordinates (u, v), the
@@ -256,10 +252,10 @@ CW_INLINE cw_surface surface_triangle(const cw_world *w, cw_hit hit, vec3 p)
     float b0 = 1.0f - hit.u - hit.v;
     int material, normals;
     if (hit.block > 0) {
-        CW_GLOBAL const cw_tri4 *b = &w->tri_blocks[hit.block - 1];
-        p0 = tri4_vertex(b, 0, hit.lane);
-        p1 = tri4_vertex(b, 1, hit.lane);
-        p2 = tri4_vertex(b, 2, hit.lane);
+        CW_GLOBAL const cw_tri8 *b = &w->tri_blocks[hit.block - 1];
+        p0 = tri8_vertex(b, 0, hit.lane);
+        p1 = tri8_vertex(b, 1, hit.lane);
+        p2 = tri8_vertex(b, 2, hit.lane);
         material = b->material[hit.lane];
         normals = b->normals[hit.lane];
     } else {

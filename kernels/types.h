@@ -41,19 +41,21 @@ typedef struct {
     int pad0, pad1;
 } cw_triangle;
 
-/* Up to four triangles of one BVH leaf side by side, tested alone or with the leaf's next
- * block in one 8-lane ray-triangle test (isect_tri8, triangle.h): v[3 * k + a] holds coordinate a
- * (x, y, z) of vertex k (p0, p1, p2), lane i that of triangle index[i] (an index into the triangle
- * array); an unused lane has index -1 and zero vertices. Lane i's material and normals are triangle
- * index[i]'s, so that the surface at a hit in a block (cw_hit.block) is made from the block the
- * test has just read, not from a second, random read of the triangle array: three cache lines in
- * all. */
+/* Up to eight triangles of one BVH leaf side by side, for one 8-lane ray-triangle test
+ * (isect_tri8, triangle.h): row r = 3 * k + a holds coordinate a (x, y, z) of vertex k (p0, p1,
+ * p2), lanes 0-3 in v[2 * r] and lanes 4-7 in v[2 * r + 1], lane i that of triangle index[i] (an
+ * index into the triangle array); an unused lane has index -1 and zero vertices. A row is 32
+ * contiguous bytes, one load of eight lanes (two blocks of four side by side took a load and an
+ * insert per row: 100k random triangles at 256x256, kernel instructions 201.8M -> 194.8M).
+ * Lane i's material and normals are triangle index[i]'s, so that the surface at a hit in a
+ * block (cw_hit.block) is made from the block the test has just read, not from a second,
+ * random read of the triangle array: six cache lines in all, the rows in the first five. */
 typedef struct {
-    cw_float4 v[9];
-    int index[4];
-    int material[4];
-    int normals[4];
-} cw_tri4;
+    cw_float4 v[18];
+    int index[8];
+    int material[8];
+    int normals[8];
+} cw_tri8;
 
 /* Up to four spheres of one BVH leaf side by side, tested alone or with the leaf's next
  * block in one 8-lane ray-sphere test (isect_sph8, sphere.h): lane i of cx, cy, cz, r is sphere
@@ -67,8 +69,8 @@ typedef struct {
 } cw_sph4;
 
 /* The count of a wide-BVH leaf of blocks (cw_bvhw_node.count < -1) is -1 - (nb | kind):
- * nb blocks, of spheres (cw_sph4) where the CW_LEAF_SPHERES bit is set, else of triangles
- * (cw_tri4). */
+ * nb blocks, of spheres (cw_sph4, tested two at a time) where the CW_LEAF_SPHERES bit is set,
+ * else of triangles (cw_tri8, one test each). */
 #define CW_LEAF_SPHERES (1 << 24)
 
 /* An open cone or cylinder (no caps) between a base and an apex disc. */
@@ -133,7 +135,7 @@ typedef struct {
     int child[CW_BVH_WIDTH]; /* interior child: its node index; leaf: first entry in refs */
     int count[CW_BVH_WIDTH]; /* leaf: number of references (> 0), or for a leaf of
                               * triangles only or spheres only, -1 - its number of blocks
-                              * (cw_tri4 or cw_sph4, with CW_LEAF_SPHERES) (< -1), child
+                              * (cw_tri8 or cw_sph4, with CW_LEAF_SPHERES) (< -1), child
                               * then the first block; interior: 0; empty: -1 */
 } cw_bvhw_node;
 
@@ -218,7 +220,8 @@ typedef struct {
 #define CW_COUNT_DEPTH 5 /* per-pixel kernel: the deepest ray traced (the wavefront's levels) */
 #define CW_COUNT_NEXT 6  /* per-pixel kernel: the next run of pixels to hand out */
 /* With CW_STATS, the work of the BVH walks (traverse.h): the nodes the closest-hit walks
- * visit and the primitive tests they make (one or two blocks of four: one test), then the same for
+ * visit and the primitive tests they make (a block of eight triangles, or one or two blocks of four
+ * spheres: one test), then the same for
  * the shadow rays' any-hit walks (a shadow cache test included). */
 #define CW_COUNT_CLOSEST_NODES 7
 #define CW_COUNT_CLOSEST_TESTS 8
@@ -232,7 +235,7 @@ typedef struct {
     int kind;   /* CW_PRIM_*; CW_PRIM_NONE for a miss */
     int index;  /* index into the array of that kind */
     int inst;   /* 1 + the instance whose mesh the hit triangle is in; 0: the world's */
-    int block;  /* a hit in a block (cw_tri4, cw_sph4 by kind): 1 + the block; 0: none */
+    int block;  /* a hit in a block (cw_tri8, cw_sph4 by kind): 1 + the block; 0: none */
     int lane;   /* and its lane there */
 } cw_hit;
 

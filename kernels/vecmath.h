@@ -1,5 +1,5 @@
 /* v3_, v4_, v8_, vl_: vector arithmetic on vec3 (three floats), cw_float4, cw_float8 (the lanes
- * of one test of two blocks of four primitives) and cw_lanes (CW_BVH_WIDTH floats: the lanes of
+ * of one test of eight primitives) and cw_lanes (CW_BVH_WIDTH floats: the lanes of
  * one box test of the wide BVH), for the kernel headers: written once for
  * OpenCL C (vector operators and built-ins) and once for host C99 (the structs of compat.h), so
  * that the kernel headers compile as both. */
@@ -22,7 +22,8 @@ CW_INLINE cw_float4 v4_from3(vec3 a, float w)
 {
     return (float4)(a, w);
 }
-/* Eight lanes: the primitives of one or two blocks of four (cw_tri4, cw_sph4) in one test.
+/* Eight lanes: the primitives of one test (a block of eight triangles, cw_tri8, or one or two
+ * blocks of four spheres, cw_sph4).
  * v8_pair reads lanes 0-3 from a, 4-7 from b. Written lane by lane, not (float8)(a, b): that
  * is a shuffle from four lanes to eight, on which Oclgrind 21.10's --uninitialized check
  * crashes (the optimised build makes the same one shuffle of it either way). */

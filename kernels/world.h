@@ -17,7 +17,7 @@
     X(cw_sphere, spheres, "spheres")                                                               \
     X(int, sphere_materials, "sphere materials") /* sphere i's material */                         \
     X(cw_triangle, triangles, "triangles")                                                         \
-    X(cw_tri4, tri_blocks, "triangle blocks") /* the leaves of triangles only, 4 by 4 */           \
+    X(cw_tri8, tri_blocks, "triangle blocks") /* the leaves of triangles only, 8 by 8 */           \
     X(cw_sph4, sph_blocks, "sphere blocks")   /* the leaves of spheres only, 4 by 4 */             \
     X(cw_float4, normals, "vertex normals")   /* of smooth triangles */                            \
     X(cw_polygon, polygons, "polygons")                                                            \

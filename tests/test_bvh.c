@@ -1,7 +1,7 @@
 /* Tests for the BVH builder (host/bvh.c): the structural invariants of the flattened tree
  * on random and degenerate box sets, closest hits by a reference traversal against brute
- * force, SAH quality, the wide tree and its blocks of four triangles (each block test
- * against four single tests, run on the host), and the figures of a one-million-triangle build
+ * force, SAH quality, the wide tree and its blocks of eight triangles (each block test
+ * against eight single tests, run on the host), and the figures of a one-million-triangle build
  * (printed, not asserted: timings are noisy). No OpenCL. */
 #include <float.h>
 #include <math.h>
@@ -962,7 +962,7 @@ static void test_block_leaves(void **state)
     m_mixed = mean_leaf(&mix, &leaves_mixed);
     printf("  mean leaf: %.2f unmarked (%d leaves), %.2f all blocks (%d), %.2f 4 in 5 (%d)\n",
            m_plain, leaves_plain, m_blk, leaves_blk, m_mixed, leaves_mixed);
-    /* up to BVH_BLOCK_TEST (two blocks of four) cost one test: the soup's leaves fill up
+    /* up to BVH_BLOCK_TEST (a block of eight) cost one test: the soup's leaves fill up
      * (measured 1.33 -> 7.59; with one block of four a test, 3.86) */
     assert_true(m_blk > 6.0 && m_blk > 2.0 * m_plain);
     assert_true(m_mixed > m_plain && m_mixed < m_blk);
@@ -1382,7 +1382,7 @@ static void test_collapse_least_area(void **state)
     printf("  %d small trees: the collapse's area sum is the exhaustive least\n", trees);
 }
 
-/* ---- blocks of four triangles ------------------------------------------------------------ */
+/* ---- blocks of triangles and spheres --------------------------------------------------- */
 
 static void tri4_lane(cw_float4 *v, int lane, float x)
 {
@@ -1500,9 +1500,8 @@ static void test_sph8_matches_single(void **state)
 
 /* isect_tri8 against isect_triangle on each lane in order (the first closest wins, skip
  * and unused lanes left out): the same winner and the same t, u and v, bit for bit, for
- * rays through the triangles, along their edges and past them. One block or two: with up
- * to four triangles, the second block holds triangles too, which the lane mask (15) must
- * leave out. */
+ * rays through the triangles, along their edges and past them. One to eight lanes used: the
+ * unused ones (index -1, zero vertices, as the packing leaves them) must never hit. */
 static void test_tri8_matches_single(void **state)
 {
     int rays = 0, hits = 0;
@@ -1510,25 +1509,23 @@ static void test_tri8_matches_single(void **state)
     tu_rng_seed(77);
     for (int trial = 0; trial < 4000; trial++) {
         cw_triangle tri[8];
-        cw_tri4 bs[2];
+        cw_tri8 bs;
         int used = 1 + (int)(rnd() * 8.0f);
-        unsigned lanes = used > 4 ? 255u : 15u;
-        memset(bs, 0, sizeof bs);
+        memset(&bs, 0, sizeof bs);
         for (int l = 0; l < 8; l++) {
-            cw_tri4 *bp = &bs[l / 4];
-            int bl = l % 4;
+            int half = l / 4, bl = l % 4;
             random_triangle(&tri[l], l > 0 ? &tri[l - 1] : NULL);
-            if (l >= used && (used > 4 || l < 4)) {
-                bp->index[bl] = -1;
+            if (l >= used) {
+                bs.index[l] = -1;
                 continue;
             }
             const cw_float4 *p[3] = {&tri[l].p0, &tri[l].p1, &tri[l].p2};
             for (int v = 0; v < 3; v++) {
-                tri4_lane(&bp->v[3 * v], bl, p[v]->x);
-                tri4_lane(&bp->v[3 * v + 1], bl, p[v]->y);
-                tri4_lane(&bp->v[3 * v + 2], bl, p[v]->z);
+                tri4_lane(&bs.v[2 * (3 * v) + half], bl, p[v]->x);
+                tri4_lane(&bs.v[2 * (3 * v + 1) + half], bl, p[v]->y);
+                tri4_lane(&bs.v[2 * (3 * v + 2) + half], bl, p[v]->z);
             }
-            bp->index[bl] = 10 + l;
+            bs.index[l] = 10 + l;
         }
         for (int r = 0; r < 16; r++) {
             vec3 o = v3(rnd_range(-3.0f, 3.0f), rnd_range(-3.0f, 3.0f), rnd_range(-3.0f, 3.0f));
@@ -1562,7 +1559,7 @@ static void test_tri8_matches_single(void **state)
                     want = l;
                 }
             }
-            int got = isect_tri8(&bs[0], &bs[1], lanes, &ri, 0.0f, tmax, skip, &t4, &u4, &v4v);
+            int got = isect_tri8(&bs, &ri, 0.0f, tmax, skip, &t4, &u4, &v4v);
             assert_int_equal(got, want);
             if (want >= 0) {
                 assert_memory_equal(&t4, &t1, sizeof t1);
@@ -1573,9 +1570,8 @@ static void test_tri8_matches_single(void **state)
             rays++;
         }
     }
-    printf(
-        "  %d rays against 1-8 triangles in one or two blocks, %d hits: the same as one by one\n",
-        rays, hits);
+    printf("  %d rays against blocks of 1-8 triangles, %d hits: the same as one by one\n", rays,
+           hits);
     assert_true(hits > rays / 4);
 }
 
@@ -1674,28 +1670,32 @@ static void test_triangle_blocks(void **state)
                 int nb = -1 - c, lanes = 0;
                 assert_true(nd->child[i] >= 0 && nd->child[i] + nb <= ds.nblocks);
                 for (int bk = nd->child[i]; bk < nd->child[i] + nb; bk++)
-                    for (int l = 0; l < 4; l++) {
-                        int idx = ds.tri_blocks[bk].index[l];
+                    for (int l = 0; l < 8; l++) {
+                        const cw_tri8 *tb = &ds.tri_blocks[bk];
+                        int idx = tb->index[l], half = l / 4;
                         if (idx < 0) { /* only the last block has unused lanes, at its end */
                             assert_int_equal(bk, nd->child[i] + nb - 1);
+                            for (int r = 0; r < 9; r++) /* zero vertices: never a hit */
+                                assert_true(tri4_get(&tb->v[2 * r + half], l % 4) == 0.0f);
                             continue;
                         }
-                        assert_true(lanes == 4 * (bk - nd->child[i]) + l);
+                        assert_true(lanes == 8 * (bk - nd->child[i]) + l);
                         assert_true(idx < ds.ntri);
                         for (int v = 0; v < 3; v++) {
                             const cw_float4 *p = v == 0   ? &ds.tri[idx].p0
                                                  : v == 1 ? &ds.tri[idx].p1
                                                           : &ds.tri[idx].p2;
-                            assert_true(tri4_get(&ds.tri_blocks[bk].v[3 * v], l) == p->x);
-                            assert_true(tri4_get(&ds.tri_blocks[bk].v[3 * v + 1], l) == p->y);
-                            assert_true(tri4_get(&ds.tri_blocks[bk].v[3 * v + 2], l) == p->z);
+                            assert_true(tri4_get(&tb->v[2 * (3 * v) + half], l % 4) == p->x);
+                            assert_true(tri4_get(&tb->v[2 * (3 * v + 1) + half], l % 4) == p->y);
+                            assert_true(tri4_get(&tb->v[2 * (3 * v + 2) + half], l % 4) == p->z);
                         }
+                        assert_int_equal(tb->material[l], ds.tri[idx].material);
                         seen[ds.nsph + idx]++;
                         reached++;
                         lanes++;
                         in_blocks++;
                     }
-                assert_true(lanes > 4 * (nb - 1) && lanes <= 4 * nb);
+                assert_true(lanes > 8 * (nb - 1) && lanes <= 8 * nb);
             }
         }
     }
