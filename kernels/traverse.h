@@ -192,7 +192,13 @@ CW_FORCE_INLINE void bvh_leaf_test(const cw_world *w, int spheres, int k, int tw
  * one of eight). */
 CW_INLINE int bvh_leaf_spheres(int first, int count, int *end, int *step)
 {
-    int code = -1 - count, spheres = (code & CW_LEAF_SPHERES) != 0;
+    int code = -1 - count;
+#if CW_HAS_SPHERES && CW_HAS_TRIANGLES
+    int spheres = (code & CW_LEAF_SPHERES) != 0;
+#else
+    int spheres = CW_HAS_SPHERES; /* one kind of block: no test of the bit, no variable step
+                                   * (100k random triangles: kernel instructions -1.8%) */
+#endif
     *end = first + (code & (CW_LEAF_SPHERES - 1));
     *step = spheres ? 2 : 1;
     return spheres;
