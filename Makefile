@@ -184,13 +184,13 @@ $(BUILD)/embree-anchor: $(wildcard $(ANCHOR_DIR)/embree_anchor.c) | $(BUILD)
 # Not part of make test (which runs tests/bench.sh, a smoke run). BENCH_ARGS passes options
 # (BENCH_ARGS=--no-anchor runs without the anchor); results go to build/bench/, and with
 # UPDATE_DOCS=1 also into the generated section of docs/benchmarks.md.
-bench: $(BUILD)/clwhitted $(BUILD)/scene2pov $(BUILD)/imgcmp \
+bench: $(BUILD)/clwhitted $(BUILD)/scene2pov $(BUILD)/imgcmp $(BUILD)/clstartup \
        $(if $(filter --no-anchor,$(BENCH_ARGS)),,$(BUILD)/embree-anchor)
 	tools/bench --anchor $(BUILD)/embree-anchor $(BENCH_ARGS) \
 	    $(if $(filter 1,$(UPDATE_DOCS)),--update-docs docs/benchmarks.md)
 	tools/bench-instances $(BENCH_INSTANCES_ARGS)
 # tests/bench.sh runs POV-Ray through scene2pov, and the anchor where its source is here.
-test: $(BUILD)/scene2pov $(if $(wildcard $(ANCHOR_DIR)/embree_anchor.c),$(BUILD)/embree-anchor)
+test: $(BUILD)/scene2pov $(BUILD)/clstartup $(if $(wildcard $(ANCHOR_DIR)/embree_anchor.c),$(BUILD)/embree-anchor)
 
 # A mesh placed many times, instanced against flattened (docs/benchmarks.md, "Instances").
 bench-instances: $(BUILD)/clwhitted $(BUILD)/imgcmp
@@ -230,6 +230,10 @@ $(BUILD)/imgcmp: tools/imgcmp.c $(LIB) | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
 $(BUILD)/cldevices: tools/cldevices.c $(LIB) | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) -lOpenCL -o $@
+
+# build/clstartup: a process that only opens the OpenCL device (tools/bench's start-up floor).
+$(BUILD)/clstartup: tools/clstartup.c $(LIB) | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(DEPFLAGS) $< $(LIB) -lOpenCL -o $@
 
 $(BUILD)/oclgrind-fill-shim.so: tools/oclgrind-fill-shim.c | $(BUILD)

@@ -105,6 +105,10 @@ check_true "the scene's row" grep -Eq '^\| tiny \| pocl-pthread \| [0-9]+\.[0-9]
 check_true "the total" grep -Eq '^\| \*\*total\*\* \| pocl-pthread \| [0-9]+\.[0-9]{3} \| ' "$T/log"
 check_true "the fixed costs' columns" has "| scene | OpenCL device | parse | device | build | compile | upload | trace | write | other | cold compile | anchor build_ms | anchor render_ms | anchor rest |"
 check_true "the fixed costs' row" grep -Eq '^\| tiny \| pocl-pthread( \| [0-9.-]+){12} \|$' "$T/log"
+check_true "the start-up floor's columns" has "| scene | OpenCL device | OpenCL open | clwhitted 2x2 | anchor 2x2 | clwhitted 32 | anchor 32 | floor: clwhitted 2x2 / anchor 32 | clwhitted/anchor | beyond the floor: clwhitted/anchor |"
+# its OpenCL open and clwhitted 2x2 times are measured (the anchor's where it runs)
+check_true "the start-up floor's row" grep -Eq '^\| tiny \| pocl-pthread \| [0-9]+\.[0-9] \| [0-9]+\.[0-9] \| ' "$T/log"
+check_true "the floor's runs in results.csv" grep -q 'open_wall' "$T/out/results.csv"
 # Intel's OpenCL runtime, where tools/install-deps installed it: its own rows
 if tools/with-intel-ocl --print-env >/dev/null 2>&1; then
     check_true "the Intel device's row" grep -Eq '^\| tiny \| intel-cpu \| [0-9]+\.[0-9]{3} \| ' "$T/log"
@@ -151,6 +155,15 @@ check_true "the message names the anchor and the ways out" grep -q \
     "the Embree anchor $T/nowhere/embree-anchor is missing: build it with \`make build/embree-anchor\`.*--no-anchor" "$T/log"
 check_true "no traceback" sh -c "! grep -q Traceback '$T/log'"
 check_true "nothing run" test ! -e "$T/out2/gen"
+
+# A missing start-up floor program: a clear message that says how to build it, no run.
+mkdir -p "$T/nostart"
+ln -s "$(cd "$(dirname "$BUILD/clwhitted")" && pwd)/clwhitted" "$T/nostart/clwhitted"
+tools/bench --quick --no-anchor --no-pov --no-scale --scenes "$T/tiny.nff" --out "$T/out4" \
+    --clwhitted "$T/nostart/clwhitted" >"$T/log" 2>&1
+check "missing clstartup" 1 $?
+check_true "the message names clstartup and the way out" has "nostart/clstartup is missing: run make"
+check_true "nothing run" test ! -e "$T/out4"
 
 # A page without the generated section: refused before any run.
 tools/bench --quick --no-anchor --no-spd --out "$T/out3" --clwhitted "$BUILD/clwhitted" \
