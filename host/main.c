@@ -44,18 +44,21 @@ typedef struct {
     double opencl; /* the OpenCL start-up's duration (beside the scene load) */
 } batch_times;
 
-/* The scene load of a batch render (scene_load, scene_finish), on a thread of its own
- * while the main thread starts OpenCL, or on the main thread before it when no thread can
- * be started. OpenCL starts on the main thread because LLVM, inside PoCL, sets up its
- * signal handling there (AddressSanitizer cannot free an LLVM alternate signal stack when
- * the thread that set it exits). */
+/* The scene load of a batch render (scene_load, scene_finish) and, with prepare, the part
+ * of the upload that needs no device (renderer_prepare_scene: the conversion and the BVH
+ * build), on a thread of its own while the main thread starts OpenCL, or on the main thread
+ * before it when no thread can be started. OpenCL starts on the main thread because LLVM, inside
+ * PoCL, sets up its signal handling there (AddressSanitizer cannot free an LLVM alternate signal
+ * stack when the thread that set it exits). */
 typedef struct {
     const cli_options *o;
     const char *path; /* the scene file */
     scene *s;
     int rc; /* 0, or -1 with err */
     char err[2048];
-    double done_at; /* sys_now() at the end */
+    double done_at;    /* sys_now() at the end of the load */
+    int prepare;       /* also renderer_prepare_scene */
+    render_prep *prep; /* its result, until render_batch takes it */
     pthread_t tid;
     int threaded;
 } scene_job;
@@ -76,16 +79,22 @@ static void *scene_job_main(void *arg)
     scene_job *j = arg;
     j->rc = load_scene(j->o, j->path, j->s, j->err, sizeof j->err);
     j->done_at = sys_now();
+    if (j->rc == 0 && j->prepare &&
+        !(j->prep = renderer_prepare_scene(j->s, j->err, sizeof j->err)))
+        j->rc = -1;
     return NULL;
 }
 
-/* Starts the load, or does it now when no thread can be started. */
-static void scene_job_begin(scene_job *j, const cli_options *o, const char *path, scene *s)
+/* Starts the load (and with prepare renderer_prepare_scene), or does it now when no thread
+ * can be started. */
+static void scene_job_begin(scene_job *j, const cli_options *o, const char *path, scene *s,
+                            int prepare)
 {
     memset(j, 0, sizeof *j);
     j->o = o;
     j->path = path;
     j->s = s;
+    j->prepare = prepare;
     j->threaded = pthread_create(&j->tid, NULL, scene_job_main, j) == 0;
     if (!j->threaded)
         scene_job_main(j);
@@ -242,9 +251,10 @@ typedef struct {
 } batch;
 
 /* Renders the finished scene b->s (from the file path) once and writes it to o->output (or
- * b->default_out). Returns the exit status. */
-static int render_batch(cli_options *o, const char *path, batch *b, progress_bar *bar,
-                        batch_times *t)
+ * b->default_out); with *prep (renderer_prepare_scene of b->s) the upload starts from it
+ * (*prep is then taken: NULL). Returns the exit status. */
+static int render_batch(cli_options *o, const char *path, batch *b, render_prep **prep,
+                        progress_bar *bar, batch_times *t)
 {
     char err[2048];
     batch_meta meta;
@@ -266,8 +276,18 @@ static int render_batch(cli_options *o, const char *path, batch *b, progress_bar
         return 1;
     }
     r = b->r;
-    if (renderer_check_memory(r, s->width, s->height, err, sizeof err) != 0 ||
-        renderer_set_scene_dropping(r, &b->s, err, sizeof err) != 0) {
+    if (renderer_check_memory(r, s->width, s->height, err, sizeof err) != 0) {
+        fail_msg(bar, err);
+        return 1;
+    }
+    if (prep && *prep) {
+        render_prep *p = *prep;
+        *prep = NULL;
+        if (renderer_set_prepared(r, p, s, err, sizeof err) != 0) {
+            fail_msg(bar, err);
+            return 1;
+        }
+    } else if (renderer_set_scene_dropping(r, &b->s, err, sizeof err) != 0) {
         fail_msg(bar, err);
         return 1;
     }
@@ -333,7 +353,7 @@ static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
         return 1;
     }
     progress_status(bar, "loading the scene ...");
-    scene_job_begin(&load, o, o->scenes[0], &b.s);
+    scene_job_begin(&load, o, o->scenes[0], &b.s, 1);
     if (load.threaded || load.rc == 0) /* without a thread, a failed load ends it here */
         b.r_rc = renderer_create(&b.r, o->device, b.r_err, sizeof b.r_err) == 0 &&
                          renderer_set_settings(b.r, &o->settings, b.r_err, sizeof b.r_err) == 0
@@ -357,7 +377,7 @@ static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
         } else {
             t->loaded = k == 0 ? load.done_at : sys_now();
             progress_clear(bar);
-            one = render_batch(o, o->scenes[k], &b, bar, t);
+            one = render_batch(o, o->scenes[k], &b, k == 0 ? &load.prep : NULL, bar, t);
         }
         if (one > rc)
             rc = one;
@@ -366,6 +386,7 @@ static int run_batch(cli_options *o, progress_bar *bar, batch_times *t)
     }
     if (rc == 0 && !CW_FULL_TEARDOWN)
         sys_exit_now(0);
+    renderer_prep_free(load.prep);
     renderer_destroy(b.r);
     image_free(&b.img);
     free(b.default_out);

@@ -360,69 +360,113 @@ static void fill_view(cw_frame *f, const scene *s, vec3d origin)
     f->max_depth = s->max_depth;
 }
 
-/* renderer_set_scene; with drop (== s), the scene's primitive arrays are emptied once
- * converted. */
-static int set_scene(renderer *r, const scene *s, scene *drop, char *err, size_t errlen)
-{
+/* A scene converted for the kernels, its BVH built: what renderer_set_scene does before it
+ * needs the device (renderer_prepare_scene). */
+struct render_prep {
     devscene ds;
+    vec3d origin;     /* the local origin the arrays are relative to */
+    int world_origin; /* made with renderer_debug_world_origin's origin (0, 0, 0) */
+    double build_s;
+};
+
+/* Converts s for the kernels around the local origin (the camera's eye, or with
+ * world_origin (0, 0, 0): docs/model.md, "Far from the origin") and builds its BVH into p;
+ * with drop (== s), the scene's primitive arrays are emptied once converted. Returns 0, or
+ * -1 with err and p freed. */
+static int prepare(const scene *s, scene *drop, int world_origin, struct render_prep *p, char *err,
+                   size_t errlen)
+{
+    int converted;
+    double t0;
+    p->world_origin = world_origin;
+    p->origin = world_origin ? vec3d_make(0, 0, 0) : s->camera.eye;
+    converted = devscene_convert(s, &p->origin, &p->ds, err, errlen) == 0;
+    if (drop)
+        scene_drop_primitives(drop);
+    if (!converted)
+        goto out_free;
+    t0 = sys_now();
+    if (devscene_build_bvh(&p->ds, err, errlen) != 0)
+        goto out_free;
+    p->build_s = sys_now() - t0;
+    return 0;
+out_free:
+    devscene_free(&p->ds);
+    return -1;
+}
+
+/* Puts the prepared scene p (made from s) on the device: the kernels for its features, its
+ * arrays. p->ds is not freed here. */
+static int set_prepared(renderer *r, struct render_prep *p, const scene *s, char *err,
+                        size_t errlen)
+{
+    devscene *ds = &p->ds;
     cw_frame *f = &r->host_frame;
-    int rc = -1, converted;
     double t0;
 
     release_scene(r);
     memset(f, 0, sizeof *f);
     r->stats.build_s = r->stats.compile_s = r->stats.upload_s = 0;
     r->stats.upload_in_place = r->stats.upload_copied = 0;
-    /* the local origin: the camera's eye (docs/model.md, "Far from the origin") */
-    r->origin = r->world_origin ? vec3d_make(0, 0, 0) : s->camera.eye;
-    converted = devscene_convert(s, &r->origin, &ds, err, errlen) == 0;
-    if (drop)
-        scene_drop_primitives(drop);
-    if (!converted)
-        goto out_free;
-    r->features.spheres = ds.nsph;
-    r->features.triangles = ds.ntri;
-    r->features.polygons = ds.npg;
-    r->features.cones = ds.ncone;
-    r->features.instances = ds.ninst;
-    r->features.mirrors = ds.mirrors;
-    r->features.transmitters = ds.transmitters;
-    t0 = sys_now();
-    if (devscene_build_bvh(&ds, err, errlen) != 0)
-        goto out_free;
-    r->stats.build_s = sys_now() - t0;
-    r->stats.spheres = ds.nsph;
-    r->stats.triangles = ds.ntri;
-    r->stats.polygons = ds.npg;
-    r->stats.cones = ds.ncone;
-    r->stats.instances = ds.ninst;
+    if (p->world_origin != r->world_origin) {
+        snprintf(err, errlen,
+                 "the scene was prepared for another local origin than the "
+                 "renderer's (renderer_debug_world_origin)");
+        return -1;
+    }
+    r->origin = p->origin;
+    r->features.spheres = ds->nsph;
+    r->features.triangles = ds->ntri;
+    r->features.polygons = ds->npg;
+    r->features.cones = ds->ncone;
+    r->features.instances = ds->ninst;
+    r->features.mirrors = ds->mirrors;
+    r->features.transmitters = ds->transmitters;
+    r->stats.build_s = p->build_s;
+    r->stats.spheres = ds->nsph;
+    r->stats.triangles = ds->ntri;
+    r->stats.polygons = ds->npg;
+    r->stats.cones = ds->ncone;
+    r->stats.instances = ds->ninst;
     r->stats.meshes = 0;
-    for (int m = 0; m < ds.nmesh; m++)
-        r->stats.meshes += ds.meshes[m].root >= 0;
-    r->stats.nodes = ds.tree_wide.num_nodes;
+    for (int m = 0; m < ds->nmesh; m++)
+        r->stats.meshes += ds->meshes[m].root >= 0;
+    r->stats.nodes = ds->tree_wide.num_nodes;
 
     fill_view(f, s, r->origin);
     f->num_lights = (int)s->lights.count;
-    f->num_nodes = ds.tree_wide.num_nodes;
+    f->num_nodes = ds->tree_wide.num_nodes;
     f->spd_rays = r->settings.spd;
 
     if (renderer_ensure_program(r, renderer_strategy(r), err, errlen) != 0)
-        goto out_free;
+        return -1;
     t0 = sys_now();
     if (upload(r, &r->world.frame, f, 1, sizeof *f, 0, "frame", err, errlen) ||
-        upload_world(r, &ds, err, errlen) ||
-        upload(r, &r->lights, ds.lights, s->lights.count, sizeof *ds.lights, 0, "lights", err,
+        upload_world(r, ds, err, errlen) ||
+        upload(r, &r->lights, ds->lights, s->lights.count, sizeof *ds->lights, 0, "lights", err,
                errlen) ||
-        upload(r, &r->materials, ds.mats, s->materials.count, sizeof *ds.mats, 0, "materials", err,
-               errlen)) {
+        upload(r, &r->materials, ds->mats, s->materials.count, sizeof *ds->mats, 0, "materials",
+               err, errlen)) {
         release_scene(r);
-        goto out_free;
+        return -1;
     }
     r->have_scene = 1;
     r->stats.upload_s = sys_now() - t0;
-    rc = 0;
-out_free:
-    devscene_free(&ds);
+    return 0;
+}
+
+/* renderer_set_scene; with drop (== s), the scene's primitive arrays are emptied once
+ * converted. */
+static int set_scene(renderer *r, const scene *s, scene *drop, char *err, size_t errlen)
+{
+    struct render_prep p;
+    int rc;
+    if (prepare(s, drop, r->world_origin, &p, err, errlen) != 0) {
+        release_scene(r);
+        return -1;
+    }
+    rc = set_prepared(r, &p, s, err, errlen);
+    devscene_free(&p.ds);
     return rc;
 }
 
@@ -434,6 +478,36 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen)
 int renderer_set_scene_dropping(renderer *r, scene *s, char *err, size_t errlen)
 {
     return set_scene(r, s, s, err, errlen);
+}
+
+render_prep *renderer_prepare_scene(scene *s, char *err, size_t errlen)
+{
+    render_prep *p = calloc(1, sizeof *p);
+    if (!p) {
+        scene_drop_primitives(s);
+        snprintf(err, errlen, "out of memory for the prepared scene");
+        return NULL;
+    }
+    if (prepare(s, s, 0, p, err, errlen) != 0) {
+        free(p);
+        return NULL;
+    }
+    return p;
+}
+
+int renderer_set_prepared(renderer *r, render_prep *p, const scene *s, char *err, size_t errlen)
+{
+    int rc = set_prepared(r, p, s, err, errlen);
+    renderer_prep_free(p);
+    return rc;
+}
+
+void renderer_prep_free(render_prep *p)
+{
+    if (!p)
+        return;
+    devscene_free(&p->ds);
+    free(p);
 }
 
 /* ---- rendering and read back ------------------------------------------------------ */

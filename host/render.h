@@ -30,6 +30,19 @@ int renderer_set_scene(renderer *r, const scene *s, char *err, size_t errlen);
  * renderer's are never held at once (4M triangles: peak 985 -> 745 MB). Also on failure. */
 int renderer_set_scene_dropping(renderer *r, scene *s, char *err, size_t errlen);
 
+/* renderer_set_scene_dropping in two halves, so that the first can run while the device
+ * starts (the command line does it on the scene's load thread): renderer_prepare_scene
+ * needs no renderer: it converts s for the kernels around the camera's eye, empties s's
+ * primitive arrays (also on failure) and builds the BVH (on every core). Returns the
+ * prepared scene, or NULL with err. renderer_set_prepared then builds the kernels and
+ * uploads; s is the scene p was made from (its camera, lights and materials). It frees p,
+ * also on failure; renderer_prep_free frees one that is not used. The image is the one
+ * renderer_set_scene gives (tests/test_strategy.c). */
+typedef struct render_prep render_prep;
+render_prep *renderer_prepare_scene(scene *s, char *err, size_t errlen);
+int renderer_set_prepared(renderer *r, render_prep *p, const scene *s, char *err, size_t errlen);
+void renderer_prep_free(render_prep *p);
+
 /* Whether a width x height render fits: the accumulation image within the device's largest
  * allocation, the device's buffers within its memory, and the host's (with the device's on
  * a device sharing the host's memory) within the memory available now. Call before the

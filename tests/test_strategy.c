@@ -325,6 +325,73 @@ static void compare_all(const mode *m)
         fail_msg("%d scenes render differently with the two strategies (%s)", failed, m->name);
 }
 
+/* renderer_prepare_scene + renderer_set_prepared (the command line's upload, the first
+ * half on the load thread) give renderer_set_scene's image bit for bit and the same counts,
+ * on every scene; a prepared scene's primitive arrays are emptied; a renderer whose local
+ * origin differs refuses it; one never used is freed (the sanitizer build checks leaks). */
+static void test_prepared(void **state)
+{
+    int i, compared = 0, failed = 0;
+    const mode *m = &modes[4]; /* stats: the counts too */
+    (void)state;
+    list_scenes();
+    for (i = 0; i < num_scenes; i++) {
+        scene a, b;
+        image ia, ib;
+        render_stats sa, sb;
+        render_prep *p;
+        long ndiff, over;
+        double worst;
+        if (load(scene_paths[i], SMALL_W, SMALL_H, &a) != 0)
+            continue;
+        if (load(scene_paths[i], SMALL_W, SMALL_H, &b) != 0)
+            fail_msg("%s loads once but not twice: %s", scene_paths[i], err);
+        render_with(scene_paths[i], &a, m, RENDER_PIXEL, &ia, &sa);
+        p = renderer_prepare_scene(&b, err, sizeof err);
+        if (!p)
+            fail_msg("%s: renderer_prepare_scene: %s", scene_paths[i], err);
+        assert_int_equal(b.triangles.count + b.spheres.count + b.polygons.count + b.cones.count, 0);
+        if (renderer_set_prepared(R, p, &b, err, sizeof err) != 0 ||
+            renderer_render(R, &ib, err, sizeof err) != 0)
+            fail_msg("%s (prepared): %s", scene_paths[i], err);
+        renderer_get_stats(R, &sb);
+        /* the shadow cache's hits, and so the shadow walks' nodes, depend on which thread
+         * takes which tile: not compared */
+        sa.any_nodes = sb.any_nodes = 0;
+        if (compare_values(&ia, &ib, 0, 0.0, &ndiff, &worst, &over) != 0 ||
+            !same_counts(&sa, &sb, 0.0) || sa.nodes != sb.nodes || sa.triangles != sb.triangles ||
+            sa.spheres != sb.spheres) {
+            fprintf(stderr, "  %s: prepared and set_scene differ (%ld values)\n", scene_paths[i],
+                    ndiff);
+            write_failure(&ia, &ib, scene_paths[i], "prepared");
+            failed++;
+        }
+        compared++;
+        image_free(&ia);
+        image_free(&ib);
+        scene_free(&a);
+        scene_free(&b);
+    }
+    printf("    prepared: %d scenes compared, %d differ\n", compared, failed);
+    assert_true(compared >= 10);
+    assert_int_equal(failed, 0);
+
+    { /* another local origin: refused with a message; an unused prepared scene freed */
+        scene s;
+        render_prep *p;
+        assert_int_equal(load("scenes/default.json", SMALL_W, SMALL_H, &s), 0);
+        p = renderer_prepare_scene(&s, err, sizeof err);
+        assert_non_null(p);
+        renderer_debug_world_origin(R, 1);
+        assert_int_not_equal(renderer_set_prepared(R, p, &s, err, sizeof err), 0);
+        renderer_debug_world_origin(R, 0);
+        assert_non_null(strstr(err, "another local origin"));
+        renderer_prep_free(renderer_prepare_scene(&s, err, sizeof err));
+        renderer_prep_free(NULL);
+        scene_free(&s);
+    }
+}
+
 static void test_plain(void **state)
 {
     (void)state;
@@ -655,19 +722,13 @@ static int free_scenes(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_choice),
-        cmocka_unit_test(test_bad_setting),
-        cmocka_unit_test(test_cli),
-        cmocka_unit_test(test_plain),
-        cmocka_unit_test(test_spp4),
-        cmocka_unit_test(test_spd),
-        cmocka_unit_test(test_fast),
-        cmocka_unit_test(test_stats),
-        cmocka_unit_test(test_large),
-        cmocka_unit_test(test_progressive),
-        cmocka_unit_test(test_deep_refraction),
-        cmocka_unit_test(test_hooks_between),
-        cmocka_unit_test(test_progress),
+        cmocka_unit_test(test_choice),        cmocka_unit_test(test_bad_setting),
+        cmocka_unit_test(test_cli),           cmocka_unit_test(test_prepared),
+        cmocka_unit_test(test_plain),         cmocka_unit_test(test_spp4),
+        cmocka_unit_test(test_spd),           cmocka_unit_test(test_fast),
+        cmocka_unit_test(test_stats),         cmocka_unit_test(test_large),
+        cmocka_unit_test(test_progressive),   cmocka_unit_test(test_deep_refraction),
+        cmocka_unit_test(test_hooks_between), cmocka_unit_test(test_progress),
     };
     return cmocka_run_group_tests(tests, setup, free_scenes);
 }
