@@ -1,5 +1,5 @@
-/* The renderer's insides (struct renderer), for render.c, render_pass.c, render_rows.c and
- * render_debug.c only: everything else sees the opaque type of render.h. */
+/* The renderer's insides (struct renderer), for render.c, render_scene.c, render_pass.c,
+ * render_rows.c and render_debug.c only: everything else sees the opaque type of render.h. */
 #ifndef CW_RENDER_IMPL_H
 #define CW_RENDER_IMPL_H
 
